@@ -1,0 +1,494 @@
+"""Labelled triangle meshes for the segmentation benchmark.
+
+Every STEP part under ``<data>/step`` gives three meshes whose triangles carry the index of the
+B-rep face they lie on (the ground truth):
+
+``cad``
+    The CAD tessellation itself, as a CAD system's STL export makes it: one BRepMesh run over the
+    whole solid (linear deflection 0.1 % of the bounding-box diagonal, angular deflection 0.35 rad),
+    with one mesh segment per B-rep face so that shared edge vertices coincide. Thin long
+    triangles are kept: real CAD exports have them.
+``scan``
+    What a scanner would deliver: a finer tessellation (0.02 % of the diagonal, 0.1 rad), re-sampled
+    by CGAL isotropic remeshing (no edge protection, so sharp edges become chamfers) to about
+    40 000 triangles of uniform size, labelled by the closest fine triangle to each centroid, then
+    Gaussian noise along the vertex normals with sigma = 0.1 % of the diagonal.
+``sculpt``
+    The same remeshed surface with smooth low-frequency undulations along the vertex normals
+    (three sinusoids of wavelength diag/2 .. diag in random directions, scaled so the largest
+    displacement is 0.3 % of the diagonal), as left by free-hand sculpting.
+
+Random numbers come from ``numpy.random.default_rng`` seeded with a CRC-32 of the part and
+variant names, so every mesh is reproducible. Generated meshes are cached as ``.npz`` files under
+``bench/cache/`` keyed by the part file's contents and every generation parameter.
+
+FreeCAD 0.20 is imported from Debian's ``/usr/lib/freecad-python3/lib``; ``FreeCAD`` has to be
+imported before ``Part``/``Mesh``/``MeshPart`` or the interpreter crashes, so always go through
+:func:`freecad_modules`. Remeshing and closest-face queries come from ``idealize._native``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import sys
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict, Iterable, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+BENCH = Path(__file__).resolve().parent
+DATA = Path(os.environ.get("IDEALIZE_DATA", REPO.parent / "shared" / "data")).resolve()
+CACHE = Path(os.environ.get("IDEALIZE_BENCH_CACHE", BENCH / "cache"))
+FREECAD_LIB = "/usr/lib/freecad-python3/lib"
+
+# Bump when the generation code changes in a way that changes the meshes: invalidates the cache.
+DATASET_VERSION = 1
+
+VARIANTS = ("cad", "scan", "sculpt")
+
+# Generation parameters, all relative to the bounding-box diagonal of the part.
+CAD_LINEAR_DEFLECTION = 1e-3      # x diag
+CAD_ANGULAR_DEFLECTION = 0.35     # rad
+FINE_LINEAR_DEFLECTION = 2e-4     # x diag, the surface the scan is re-sampled from
+FINE_ANGULAR_DEFLECTION = 0.1     # rad
+SCAN_TRIANGLES = 40_000           # target triangle count of scan/sculpt meshes
+REMESH_ITERATIONS = 4
+SCAN_NOISE_SIGMA = 1e-3           # x diag, Gaussian, along vertex normals
+SCULPT_AMPLITUDE = 3e-3           # x diag, maximum displacement
+SCULPT_WAVES = 3
+SCALING_TRIANGLES = (10_000, 75_000, 300_000, 1_000_000)
+SCALING_PART = "nist_ftc_06_asme1_rd.stp"
+
+
+class DatasetError(RuntimeError):
+    """A part that cannot be turned into a benchmark mesh; the message says why."""
+
+
+@dataclass
+class LabelledMesh:
+    name: str                      # "<part stem>/<variant>"
+    part: str                      # STEP file name
+    variant: str                   # "cad", "scan", "sculpt" (or "scaling-<n>")
+    V: np.ndarray                  # float64 (N, 3)
+    F: np.ndarray                  # int32 (M, 3)
+    gt: np.ndarray                 # int32 (M,), B-rep face index of each triangle
+    face_types: List[str]          # surface class name of every B-rep face ("Plane", "Cylinder", ...)
+    diag: float                    # bounding-box diagonal of the part
+    info: Dict = field(default_factory=dict)
+
+    @property
+    def num_triangles(self) -> int:
+        return int(self.F.shape[0])
+
+
+# ----------------------------------------------------------------------------------------------
+# External modules
+
+
+def freecad_modules():
+    """(FreeCAD, Part, Mesh, MeshPart), imported in the order Debian's FreeCAD 0.20 needs."""
+    if FREECAD_LIB not in sys.path:
+        sys.path.append(FREECAD_LIB)
+    import FreeCAD  # noqa: F401  (must come first)
+    import Part
+    import Mesh
+    import MeshPart
+    return FreeCAD, Part, Mesh, MeshPart
+
+
+_NATIVE = None
+
+
+def native():
+    """The ``idealize._native`` extension (remesh_isotropic, closest_faces)."""
+    global _NATIVE
+    if _NATIVE is None:
+        if str(REPO) not in sys.path:
+            sys.path.insert(0, str(REPO))
+        from idealize import _native  # noqa: WPS433
+        _NATIVE = _native
+    return _NATIVE
+
+
+# ----------------------------------------------------------------------------------------------
+# Small mesh utilities (numpy only)
+
+
+def triangle_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    e1 = V[F[:, 1]] - V[F[:, 0]]
+    e2 = V[F[:, 2]] - V[F[:, 0]]
+    return 0.5 * np.linalg.norm(np.cross(e1, e2), axis=1)
+
+
+def bbox_diagonal(V: np.ndarray) -> float:
+    return float(np.linalg.norm(V.max(axis=0) - V.min(axis=0))) if len(V) else 0.0
+
+
+def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals (sum of un-normalised face normals, then normalised)."""
+    fn = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])  # 2 * area * unit normal
+    n = np.zeros_like(V)
+    for c in range(3):
+        np.add.at(n, F[:, c], fn)
+    length = np.linalg.norm(n, axis=1)
+    length[length == 0] = 1.0
+    return n / length[:, None]
+
+
+def edge_statistics(F: np.ndarray) -> Dict[str, int]:
+    """Counts of boundary (1 triangle), manifold (2) and non-manifold (>2) edges, and of manifold
+    edges whose two triangles traverse them in the same direction (inconsistent orientation)."""
+    directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64)
+    undirected = np.sort(directed, axis=1)
+    n = int(directed.max()) + 1 if len(directed) else 1
+    keys = undirected[:, 0] * n + undirected[:, 1]
+    _, counts = np.unique(keys, return_counts=True)
+    dkeys = directed[:, 0] * n + directed[:, 1]
+    _, dcounts = np.unique(dkeys, return_counts=True)
+    return {
+        "edges": int(len(counts)),
+        "boundary_edges": int(np.sum(counts == 1)),
+        "nonmanifold_edges": int(np.sum(counts > 2)),
+        "misoriented_edges": int(np.sum(dcounts > 1)),
+    }
+
+
+def weld(V: np.ndarray, F: np.ndarray, gt: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Merges bit-identical vertices, drops triangles that collapse; returns (V, F, gt, dropped)."""
+    unique, inverse = np.unique(V, axis=0, return_inverse=True)
+    F2 = inverse.reshape(-1)[F]
+    keep = (F2[:, 0] != F2[:, 1]) & (F2[:, 1] != F2[:, 2]) & (F2[:, 2] != F2[:, 0])
+    return unique, F2[keep].astype(np.int32), gt[keep].astype(np.int32), int(np.sum(~keep))
+
+
+def signed_volume(V: np.ndarray, F: np.ndarray) -> float:
+    return float(np.einsum("ij,ij->i", V[F[:, 0]], np.cross(V[F[:, 1]], V[F[:, 2]])).sum() / 6.0)
+
+
+def stable_seed(*parts: str) -> int:
+    return zlib.crc32(":".join(parts).encode("utf-8")) & 0xFFFFFFFF
+
+
+# ----------------------------------------------------------------------------------------------
+# Cache
+
+
+def _file_digest(path: Path) -> str:
+    return "%08x" % (zlib.crc32(Path(path).read_bytes()) & 0xFFFFFFFF)
+
+
+def _cache_path(kind: str, stem: str, params: Dict) -> Path:
+    key = json.dumps({"version": DATASET_VERSION, "kind": kind, **params}, sort_keys=True)
+    digest = hashlib.sha1(key.encode("utf-8")).hexdigest()[:12]
+    return CACHE / f"{stem}.{kind}.{digest}.npz"
+
+
+def _save(path: Path, arrays: Dict[str, np.ndarray], meta: Dict) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez_compressed(tmp, meta=np.array(json.dumps(meta)), **arrays)
+    os.replace(tmp, path)
+
+
+def _load(path: Path) -> Optional[Tuple[Dict[str, np.ndarray], Dict]]:
+    if not path.exists():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files if k != "meta"}
+            meta = json.loads(str(z["meta"]))
+        return arrays, meta
+    except Exception:  # a truncated or stale file: regenerate it
+        return None
+
+
+# ----------------------------------------------------------------------------------------------
+# STEP parts and their tessellation
+
+
+def step_files(data: Path = DATA) -> List[Path]:
+    folder = Path(data) / "step"
+    return sorted(p for p in folder.iterdir() if p.suffix.lower() in (".step", ".stp"))
+
+
+def load_solid(path: Path):
+    """The solid of a STEP file (the largest one when there are several); raises DatasetError."""
+    _, Part, _, _ = freecad_modules()
+    try:
+        shape = Part.read(str(path))
+    except Exception as exc:  # FreeCAD raises Base.FreeCADError / Part.OCCError
+        raise DatasetError(f"FreeCAD could not read the file: {exc}") from exc
+    solids = list(shape.Solids)
+    if not solids:
+        raise DatasetError(f"no solid in the file (shape type {shape.ShapeType}, {len(shape.Faces)} faces)")
+    solid = max(solids, key=lambda s: abs(s.Volume)) if len(solids) > 1 else solids[0]
+    if len(solid.Faces) == 0:
+        raise DatasetError("the solid has no faces")
+    return solid, len(solids)
+
+
+def surface_type(face) -> str:
+    return type(face.Surface).__name__
+
+
+def tessellate(solid, linear: float, angular: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray, Dict]:
+    """One BRepMesh run over the whole solid with one mesh segment per B-rep face.
+
+    Returns (V, F, gt, info): welded vertices, triangles oriented outwards, the B-rep face index of
+    every triangle, and edge statistics. The segment -> face correspondence is checked by the
+    distance from a triangle centroid of each segment to the face it is supposed to be.
+    """
+    FreeCAD, Part, _, MeshPart = freecad_modules()
+    mesh = MeshPart.meshFromShape(Shape=solid, LinearDeflection=float(linear),
+                                  AngularDeflection=float(angular), Relative=False, Segments=True)
+    points, facets = mesh.Topology
+    V = np.array([(p.x, p.y, p.z) for p in points], dtype=np.float64).reshape(-1, 3)
+    F = np.array(facets, dtype=np.int64).reshape(-1, 3)
+    if len(F) == 0:
+        raise DatasetError("the tessellation has no triangles")
+
+    faces = solid.Faces
+    gt = np.full(len(F), -1, dtype=np.int64)
+    tolerance = max(10.0 * linear, 1e-6 * bbox_diagonal(V))
+    remapped = 0
+    for s in range(mesh.countSegments()):
+        tri = np.asarray(mesh.getSegment(s), dtype=np.int64)
+        if len(tri) == 0:
+            continue
+        centroids = V[F[tri]].mean(axis=1)
+        probe = centroids[int(np.argmax(triangle_areas(V, F[tri])))]
+        vertex = Part.Vertex(FreeCAD.Vector(*probe))
+        face = s if s < len(faces) else -1
+        if face < 0 or faces[face].distToShape(vertex)[0] > tolerance:
+            distances = [f.distToShape(vertex)[0] for f in faces]
+            face = int(np.argmin(distances))
+            remapped += 1
+        gt[tri] = face
+    if np.any(gt < 0):
+        raise DatasetError(f"{int(np.sum(gt < 0))} triangles belong to no B-rep face")
+
+    V, F, gt, collapsed = weld(V, F, gt)
+    if signed_volume(V, F) < 0:
+        F = F[:, ::-1].copy()
+    info = {"linear_deflection": float(linear), "angular_deflection": float(angular),
+            "collapsed_triangles": collapsed, "remapped_segments": remapped,
+            "faces_without_triangles": int(len(faces) - len(np.unique(gt)))}
+    info.update(edge_statistics(F))
+    info["watertight"] = info["boundary_edges"] == 0 and info["nonmanifold_edges"] == 0
+    return V, np.ascontiguousarray(F, dtype=np.int32), gt.astype(np.int32), info
+
+
+class _Part:
+    """Lazily loaded STEP part shared by the variants (FreeCAD is only touched on a cache miss)."""
+
+    def __init__(self, path: Path):
+        self.path = Path(path)
+        self.stem = self.path.stem
+        self.digest = _file_digest(self.path)
+        self._solid = None
+        self._solid_count = None
+        self._meta = None
+
+    def solid(self):
+        if self._solid is None:
+            self._solid, self._solid_count = load_solid(self.path)
+        return self._solid
+
+    def meta(self) -> Dict:
+        """Face types and diagonal, cached on their own so cache hits need no FreeCAD."""
+        if self._meta is None:
+            path = _cache_path("meta", self.stem, {"file": self.digest})
+            hit = _load(path)
+            if hit is None:
+                solid = self.solid()
+                meta = {"face_types": [surface_type(f) for f in solid.Faces],
+                        "diag": float(solid.BoundBox.DiagonalLength),
+                        "solids_in_file": self._solid_count,
+                        "valid": bool(solid.isValid())}
+                _save(path, {}, meta)
+            else:
+                meta = hit[1]
+            self._meta = meta
+        return self._meta
+
+    def tessellation(self, linear_rel: float, angular: float):
+        params = {"file": self.digest, "linear": linear_rel, "angular": angular}
+        path = _cache_path("tess", self.stem, params)
+        hit = _load(path)
+        if hit is not None:
+            a, info = hit
+            return a["V"], a["F"], a["gt"], info
+        diag = self.meta()["diag"]
+        V, F, gt, info = tessellate(self.solid(), linear_rel * diag, angular)
+        _save(path, {"V": V, "F": F, "gt": gt}, info)
+        return V, F, gt, info
+
+    def remeshed(self, triangles: int, iterations: int = REMESH_ITERATIONS):
+        """Fine tessellation re-sampled by isotropic remeshing, labelled by closest fine triangle."""
+        params = {"file": self.digest, "linear": FINE_LINEAR_DEFLECTION, "angular": FINE_ANGULAR_DEFLECTION,
+                  "triangles": int(triangles), "iterations": int(iterations)}
+        path = _cache_path("remesh", self.stem, params)
+        hit = _load(path)
+        if hit is not None:
+            a, info = hit
+            return a["V"], a["F"], a["gt"], info
+        Vf, Ff, gtf, fine_info = self.tessellation(FINE_LINEAR_DEFLECTION, FINE_ANGULAR_DEFLECTION)
+        if fine_info["nonmanifold_edges"]:
+            raise DatasetError(f"fine tessellation has {fine_info['nonmanifold_edges']} non-manifold edges")
+        area = float(triangle_areas(Vf, Ff).sum())
+        L = math.sqrt(4.0 * area / (math.sqrt(3.0) * triangles))
+        nat = native()
+        try:
+            V, F = nat.remesh_isotropic(np.ascontiguousarray(Vf), np.ascontiguousarray(Ff, dtype=np.int32),
+                                        L, int(iterations))
+        except Exception as exc:
+            raise DatasetError(f"isotropic remeshing failed: {exc}") from exc
+        V = np.ascontiguousarray(V, dtype=np.float64)
+        F = np.ascontiguousarray(F, dtype=np.int32)
+        centroids = np.ascontiguousarray(V[F].mean(axis=1))
+        nearest = np.asarray(nat.closest_faces(np.ascontiguousarray(Vf), np.ascontiguousarray(Ff, dtype=np.int32),
+                                               centroids), dtype=np.int64)
+        gt = gtf[nearest].astype(np.int32)
+        info = {"fine_triangles": int(len(Ff)), "fine_watertight": bool(fine_info["watertight"]),
+                "target_edge_length": L, "iterations": int(iterations), "target_triangles": int(triangles)}
+        info.update(edge_statistics(F))
+        info["watertight"] = info["boundary_edges"] == 0 and info["nonmanifold_edges"] == 0
+        _save(path, {"V": V, "F": F, "gt": gt}, info)
+        return V, F, gt, info
+
+
+def _scan_noise(V: np.ndarray, F: np.ndarray, diag: float, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    n = vertex_normals(V, F)
+    return V + n * rng.normal(0.0, SCAN_NOISE_SIGMA * diag, size=len(V))[:, None]
+
+
+def _sculpt(V: np.ndarray, F: np.ndarray, diag: float, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    n = vertex_normals(V, F)
+    d = np.zeros(len(V))
+    for _ in range(SCULPT_WAVES):
+        direction = rng.normal(size=3)
+        direction /= np.linalg.norm(direction)
+        wavelength = rng.uniform(diag / 2.0, diag)
+        phase = rng.uniform(0.0, 2.0 * math.pi)
+        d += np.sin(2.0 * math.pi * (V @ direction) / wavelength + phase)
+    peak = np.abs(d).max()
+    if peak > 0:
+        d *= SCULPT_AMPLITUDE * diag / peak
+    return V + n * d[:, None]
+
+
+def make_variant(part: _Part, variant: str) -> LabelledMesh:
+    meta = part.meta()
+    diag = meta["diag"]
+    if variant == "cad":
+        V, F, gt, info = part.tessellation(CAD_LINEAR_DEFLECTION, CAD_ANGULAR_DEFLECTION)
+    elif variant in ("scan", "sculpt"):
+        V, F, gt, info = part.remeshed(SCAN_TRIANGLES)
+        info = dict(info)
+        seed = stable_seed(part.path.name, variant)
+        V = _scan_noise(V, F, diag, seed) if variant == "scan" else _sculpt(V, F, diag, seed)
+        info["seed"] = seed
+    else:
+        raise ValueError(f"unknown variant {variant!r}")
+    return LabelledMesh(name=f"{part.stem}/{variant}", part=part.path.name, variant=variant,
+                        V=np.ascontiguousarray(V, dtype=np.float64), F=np.ascontiguousarray(F, dtype=np.int32),
+                        gt=np.ascontiguousarray(gt, dtype=np.int32), face_types=list(meta["face_types"]),
+                        diag=float(diag), info=info)
+
+
+def load_part(path: Path, variants: Sequence[str] = VARIANTS, log=print) -> List[LabelledMesh]:
+    """The requested variants of one STEP part; variants that fail are skipped with a message."""
+    part = _Part(path)
+    out = []
+    for variant in variants:
+        try:
+            mesh = make_variant(part, variant)
+        except DatasetError as exc:
+            log(f"skip {part.stem}/{variant}: {exc}")
+            continue
+        if variant == "cad" and not mesh.info.get("watertight", True):
+            log(f"note {part.stem}/cad: tessellation is not watertight "
+                f"({mesh.info['boundary_edges']} boundary, {mesh.info['nonmanifold_edges']} non-manifold edges)")
+        out.append(mesh)
+    return out
+
+
+def load_parts(variants: Sequence[str] = VARIANTS, only: Optional[Iterable[str]] = None,
+               limit: Optional[int] = None, log=print) -> List[LabelledMesh]:
+    """Labelled meshes of every STEP part (or those whose file name contains one of `only`)."""
+    files = step_files()
+    if only:
+        keys = list(only)
+        files = [p for p in files if any(k in p.name for k in keys)]
+    if limit is not None:
+        files = files[:limit]
+    meshes = []
+    for path in files:
+        try:
+            meshes.extend(load_part(path, variants, log=log))
+        except DatasetError as exc:
+            log(f"skip {path.name}: {exc}")
+    return meshes
+
+
+def scaling_mesh(triangles: int, part_file: str = SCALING_PART) -> LabelledMesh:
+    """The scan variant of one part re-sampled to about `triangles` triangles (for timing)."""
+    part = _Part(step_files_by_name()[part_file])
+    V, F, gt, info = part.remeshed(int(triangles))
+    meta = part.meta()
+    seed = stable_seed(part_file, "scan")
+    V = _scan_noise(V, F, meta["diag"], seed)
+    return LabelledMesh(name=f"{part.stem}/scan-{triangles}", part=part_file, variant=f"scaling-{triangles}",
+                        V=V, F=F, gt=gt, face_types=list(meta["face_types"]), diag=float(meta["diag"]), info=info)
+
+
+def step_files_by_name() -> Dict[str, Path]:
+    return {p.name: p for p in step_files()}
+
+
+# ----------------------------------------------------------------------------------------------
+# Real meshes (no ground truth)
+
+REAL_MESH_NOTES = {
+    "block.stl": "remeshed CAD part, huge coordinates, open and non-manifold in places",
+    "joint.stl": "remeshed CAD part",
+    "casting.stl": "remeshed CAD part, open and non-manifold in places",
+    "fandisk.obj": "classic fandisk, clean tessellation",
+    "fandisk_noisy0.1.off": "fandisk with heavy synthetic noise",
+    "MachinedPart2.stl": "coarse CAD tessellation",
+    "occt_TR12J_OCC.stl": "cast gearbox housing, CAD tessellation with many fillets",
+    "dirty-scan-2019-03.stl": "raw open scan of a non-mechanical object (robustness case)",
+}
+
+
+def load_real_meshes(data: Path = DATA) -> List[Dict[str, str]]:
+    """The meshes under ``<data>/mesh`` as dicts with "name", "path" and "note"."""
+    folder = Path(data) / "mesh"
+    out = []
+    for p in sorted(folder.iterdir(), key=lambda q: q.name.lower()):
+        if p.suffix.lower() not in (".stl", ".obj", ".off", ".ply"):
+            continue
+        note = REAL_MESH_NOTES.get(p.name)
+        if note is None and p.name.startswith("abc_"):
+            note = "ABC dataset sample, CAD tessellation of 3 merged parts"
+        out.append({"name": p.stem, "path": str(p), "note": note or ""})
+    return out
+
+
+if __name__ == "__main__":  # quick listing: python3 bench/datasets.py [name-filter ...]
+    import time
+
+    start = time.perf_counter()
+    for m in load_parts(only=sys.argv[1:] or None):
+        counts = np.bincount(m.gt, minlength=len(m.face_types))
+        print(f"{m.name:45s} {m.num_triangles:7d} tris  {len(m.face_types):4d} faces "
+              f"({int(np.sum(counts > 0))} with triangles)  watertight={m.info.get('watertight')}")
+    print(f"{time.perf_counter() - start:.1f} s")

@@ -1,0 +1,15 @@
+"""Idealize: turn triangle meshes of prismatic mechanical parts into features and CAD.
+
+Console use (plain Python or FreeCAD)::
+
+    import idealize
+    mesh = idealize.load_mesh("part.stl")
+    seg = idealize.segment(mesh)
+    seg.labels        # one patch id per input triangle, -1 on transitions
+    seg.features      # one summary dict per patch
+"""
+from .mesh import Mesh, MeshError, load_mesh
+from .segmentation import Segmentation, segment
+
+__all__ = ["Mesh", "MeshError", "load_mesh", "Segmentation", "segment"]
+__version__ = "0.1.0"

@@ -1,0 +1,52 @@
+"""Command line: python -m idealize convert INPUT -o OUT.step --report REPORT.json"""
+import argparse
+import sys
+import time
+
+from .mesh import MeshError, load_mesh
+from .report import build_report, write_report
+from .segmentation import segment
+
+NO_STEP_YET = ("no STEP file was written: B-rep construction and STEP export are not implemented "
+               "yet; this version stops after segmentation")
+
+
+def convert(args):
+    timings = {}
+    start = time.perf_counter()
+    mesh = load_mesh(args.input)
+    timings["load"] = time.perf_counter() - start
+    seg = segment(mesh)
+    for stage, seconds in seg.timings.items():
+        timings["segment." + stage] = seconds
+    timings["segment"] = sum(seg.timings.values())
+    timings["total"] = time.perf_counter() - start
+    step = {"written": False, "path": None, "reason": NO_STEP_YET}
+    report = build_report(mesh, seg, timings, step)
+    if args.report:
+        write_report(report, args.report)
+    print("%s: %d triangles, %d features, %d transition triangles, %.3f s"
+          % (args.input, mesh.n_triangles, seg.n_features, int((seg.labels < 0).sum()), timings["total"]))
+    if args.report:
+        print("report written to %s" % args.report)
+    print("note: " + NO_STEP_YET + " (%s not created)" % args.output, file=sys.stderr)
+    return 0
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="python -m idealize",
+                                     description="Turn a triangle mesh of a mechanical part into features and CAD.")
+    commands = parser.add_subparsers(dest="command", required=True)
+    p = commands.add_parser("convert", help="segment a mesh into features and write a report")
+    p.add_argument("input", help="STL, OBJ, OFF or PLY file")
+    p.add_argument("-o", "--output", required=True, help="STEP file to write")
+    p.add_argument("--report", help="JSON report to write")
+    args = parser.parse_args(argv)
+    try:
+        return convert(args)
+    except MeshError as error:
+        print("error: %s" % error, file=sys.stderr)
+        return 2
+    except OSError as error:
+        print("error: %s" % error, file=sys.stderr)
+        return 2

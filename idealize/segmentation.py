@@ -1,0 +1,46 @@
+"""Automatic feature segmentation (mean-curvature histograms, Chen & Feng 2014)."""
+import numpy as np
+
+from ._loader import native
+from .mesh import Mesh, MeshError
+
+
+class Segmentation:
+    """Result of :func:`segment`.
+
+    labels: (M,) int32, one patch id per input triangle in input order, -1 on transition
+    (border) triangles and on degenerate ones.
+    features: list of dicts, one per patch: id, kind ("smooth", "sharp_convex", "sharp_concave"),
+    triangles, area, mean_curvature, curvature_range.
+    timings: seconds per stage.
+    working: the refined mesh the analysis ran on and its per-vertex curvature, for later stages.
+    """
+
+    def __init__(self, result):
+        self.labels = result.pop("labels")
+        self.features = result.pop("patches")
+        self.timings = dict(result.pop("timings"))
+        self.removed_degenerate = result.pop("removed_degenerate")
+        self.removed_duplicate = result.pop("removed_duplicate")
+        self.histogram = result.pop("histogram")
+        self.mesh_check = {key: result.pop(key) for key in ("shells", "boundary_edges", "nonmanifold_edges")}
+        self.working = result
+
+    @property
+    def n_features(self):
+        return len(self.features)
+
+    def __repr__(self):
+        transition = int(np.count_nonzero(self.labels < 0))
+        return "<idealize.Segmentation %d features, %d of %d triangles on transitions>" % (
+            self.n_features, transition, len(self.labels))
+
+
+def segment(mesh):
+    """Segment a mesh into feature patches, fully automatically (no parameters)."""
+    if not isinstance(mesh, Mesh):
+        raise TypeError("segment() takes an idealize.Mesh (see idealize.load_mesh), got %s"
+                        % type(mesh).__name__)
+    if mesh.n_triangles == 0:
+        raise MeshError("the mesh has no triangles")
+    return Segmentation(native.segment(mesh.vertices, mesh.faces))

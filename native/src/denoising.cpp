@@ -1,0 +1,120 @@
+#include "denoising.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace idealize {
+
+namespace {
+
+struct FaceGeometry {
+  MatrixX3d normal, centroid;
+  Eigen::VectorXd area;
+};
+
+FaceGeometry face_geometry(const MatrixX3d& V, const MatrixX3i& F) {
+  FaceGeometry g;
+  g.normal.resize(F.rows(), 3);
+  g.centroid.resize(F.rows(), 3);
+  g.area.resize(F.rows());
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    const double length = n.norm();
+    g.area[f] = 0.5 * length;
+    g.normal.row(f) = (length > 0.0 ? Eigen::Vector3d(n / length) : Eigen::Vector3d::Zero()).transpose();
+    g.centroid.row(f) = ((a + b + c) / 3.0).transpose();
+  }
+  return g;
+}
+
+// Faces sharing at least one vertex with each face (itself included), compressed.
+void face_rings(const TriangleMesh& mesh, const MeshTopology& topology, std::vector<int>& offsets,
+                std::vector<int>& ring) {
+  const int nf = mesh.num_faces();
+  offsets.assign(nf + 1, 0);
+  ring.clear();
+  ring.reserve(static_cast<size_t>(nf) * 13);
+  std::vector<int> stamp(nf, -1);
+  for (int f = 0; f < nf; ++f) {
+    for (int c = 0; c < 3; ++c) {
+      const int v = mesh.F(f, c);
+      for (const int* g = topology.vertex_faces_begin(v); g != topology.vertex_faces_end(v); ++g)
+        if (stamp[*g] != f) {
+          stamp[*g] = f;
+          ring.push_back(*g);
+        }
+    }
+    offsets[f + 1] = static_cast<int>(ring.size());
+  }
+}
+
+}  // namespace
+
+MatrixX3d denoised_positions(const TriangleMesh& mesh, const MeshTopology& topology,
+                             const DenoisingOptions& options) {
+  const int nf = mesh.num_faces();
+  FaceGeometry g = face_geometry(mesh.V, mesh.F);
+
+  // Kernel widths from the data, over all pairs of faces that share a vertex: spatial = their mean
+  // centroid distance; range = a multiple of their median normal difference.
+  std::vector<int> offsets, ring;
+  face_rings(mesh, topology, offsets, ring);
+  std::vector<double> normal_jumps, distances(ring.size());
+  normal_jumps.reserve(ring.size());
+  double centroid_distance = 0.0;
+  for (int f = 0; f < nf; ++f)
+    for (int k = offsets[f]; k < offsets[f + 1]; ++k) {
+      distances[k] = (g.centroid.row(f) - g.centroid.row(ring[k])).norm();
+      if (ring[k] == f) continue;
+      normal_jumps.push_back((g.normal.row(f) - g.normal.row(ring[k])).norm());
+      centroid_distance += distances[k];
+    }
+  if (normal_jumps.empty()) return mesh.V;
+  centroid_distance /= static_cast<double>(normal_jumps.size());
+  auto middle = normal_jumps.begin() + normal_jumps.size() / 2;
+  std::nth_element(normal_jumps.begin(), middle, normal_jumps.end());
+  const double sigma_range = options.range_factor * *middle;
+  if (!(sigma_range > 0.0) || !(centroid_distance > 0.0)) return mesh.V;  // no noise to remove
+
+  std::vector<double> spatial(ring.size());
+  for (size_t k = 0; k < ring.size(); ++k)
+    spatial[k] = g.area[ring[k]] * std::exp(-distances[k] * distances[k] / (2.0 * centroid_distance * centroid_distance));
+
+  MatrixX3d normals = g.normal, next(nf, 3);
+  const double range_scale = 1.0 / (2.0 * sigma_range * sigma_range);
+  for (int it = 0; it < options.normal_iterations; ++it) {
+    for (int f = 0; f < nf; ++f) {
+      Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+      for (int k = offsets[f]; k < offsets[f + 1]; ++k) {
+        const int h = ring[k];
+        const double jump = (normals.row(f) - normals.row(h)).squaredNorm();
+        sum += spatial[k] * std::exp(-jump * range_scale) * normals.row(h);
+      }
+      const double length = sum.norm();
+      next.row(f) = length > 0.0 ? (sum / length).eval() : normals.row(f);
+    }
+    normals.swap(next);
+  }
+
+  // Move each vertex so that its faces agree with the filtered normals (Zheng et al., eq. 7).
+  MatrixX3d V = mesh.V, delta(V.rows(), 3);
+  for (int it = 0; it < options.vertex_iterations; ++it) {
+    delta.setZero();
+    for (int f = 0; f < nf; ++f) {
+      const Eigen::RowVector3d centroid = (V.row(mesh.F(f, 0)) + V.row(mesh.F(f, 1)) + V.row(mesh.F(f, 2))) / 3.0;
+      for (int c = 0; c < 3; ++c) {
+        const int v = mesh.F(f, c);
+        delta.row(v) += normals.row(f).dot(centroid - V.row(v)) * normals.row(f);
+      }
+    }
+    for (int v = 0; v < V.rows(); ++v) {
+      const int count = topology.vertex_face_count(v);
+      if (count > 0 && !topology.is_boundary_vertex(v)) V.row(v) += delta.row(v) / count;
+    }
+  }
+  return V;
+}
+
+}  // namespace idealize

@@ -1,0 +1,139 @@
+#include "mesh.h"
+
+#include <algorithm>
+#include <numeric>
+
+namespace idealize {
+
+namespace {
+
+// Compressed "vertex -> incident faces" lists, built by counting sort (linear time).
+void build_vertex_faces(const MatrixX3i& F, int num_vertices, std::vector<int>& offsets,
+                        std::vector<int>& faces) {
+  offsets.assign(num_vertices + 1, 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) ++offsets[F(f, c) + 1];
+  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+  faces.resize(offsets.back());
+  std::vector<int> cursor(offsets.begin(), offsets.end() - 1);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) faces[cursor[F(f, c)]++] = static_cast<int>(f);
+}
+
+}  // namespace
+
+MeshTopology::MeshTopology(const TriangleMesh& mesh) {
+  const MatrixX3i& F = mesh.F;
+  const int nv = mesh.num_vertices();
+  const int nf = mesh.num_faces();
+  build_vertex_faces(F, nv, vertex_face_offsets_, vertex_faces_);
+
+  // Half-edges bucketed by their smaller vertex; within a bucket sorted by the larger one, so
+  // equal keys are adjacent and become one edge. Linear apart from tiny per-vertex sorts.
+  struct HalfEdge {
+    int other;   // larger vertex
+    int corner;  // 3 * face + corner opposite to the edge
+  };
+  std::vector<int> bucket_offsets(nv + 1, 0);
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = F(f, (c + 1) % 3), b = F(f, (c + 2) % 3);
+      ++bucket_offsets[std::min(a, b) + 1];
+    }
+  std::partial_sum(bucket_offsets.begin(), bucket_offsets.end(), bucket_offsets.begin());
+  std::vector<HalfEdge> half_edges(bucket_offsets.back());
+  {
+    std::vector<int> cursor(bucket_offsets.begin(), bucket_offsets.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int a = F(f, (c + 1) % 3), b = F(f, (c + 2) % 3);
+        half_edges[cursor[std::min(a, b)]++] = {std::max(a, b), 3 * f + c};
+      }
+  }
+
+  face_edges_.assign(3 * static_cast<size_t>(nf), -1);
+  face_neighbors_.assign(3 * static_cast<size_t>(nf), -1);
+  boundary_vertex_.assign(nv, 0);
+  edge_vertices_.reserve(half_edges.size() / 2 + 1);
+  for (int a = 0; a < nv; ++a) {
+    auto first = half_edges.begin() + bucket_offsets[a];
+    auto last = half_edges.begin() + bucket_offsets[a + 1];
+    std::sort(first, last, [](const HalfEdge& x, const HalfEdge& y) {
+      return x.other != y.other ? x.other < y.other : x.corner < y.corner;
+    });
+    for (auto run = first; run != last;) {
+      auto run_end = run;
+      while (run_end != last && run_end->other == run->other) ++run_end;
+      const int e = static_cast<int>(edge_vertices_.size());
+      const int count = static_cast<int>(run_end - run);
+      edge_vertices_.push_back({a, run->other});
+      edge_face_count_.push_back(count);
+      for (auto h = run; h != run_end; ++h) face_edges_[h->corner] = e;
+      if (count == 2) {
+        face_neighbors_[run->corner] = (run + 1)->corner / 3;
+        face_neighbors_[(run + 1)->corner] = run->corner / 3;
+      } else {
+        boundary_vertex_[a] = boundary_vertex_[run->other] = 1;
+        (count == 1 ? num_boundary_edges_ : num_nonmanifold_edges_)++;
+      }
+      run = run_end;
+    }
+  }
+
+  // One-ring vertex neighbours: the other two vertices of every incident face, deduplicated.
+  vertex_neighbor_offsets_.assign(nv + 1, 0);
+  std::vector<int> ring;
+  vertex_neighbors_.reserve(vertex_faces_.size());
+  for (int v = 0; v < nv; ++v) {
+    ring.clear();
+    for (const int* f = vertex_faces_begin(v); f != vertex_faces_end(v); ++f)
+      for (int c = 0; c < 3; ++c)
+        if (F(*f, c) != v) ring.push_back(F(*f, c));
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    vertex_neighbors_.insert(vertex_neighbors_.end(), ring.begin(), ring.end());
+    vertex_neighbor_offsets_[v + 1] = static_cast<int>(vertex_neighbors_.size());
+  }
+}
+
+int face_components(const MeshTopology& topology, int num_faces, std::vector<int>& component) {
+  component.assign(num_faces, -1);
+  std::vector<int> stack;
+  int count = 0;
+  for (int seed = 0; seed < num_faces; ++seed) {
+    if (component[seed] >= 0) continue;
+    component[seed] = count;
+    stack.push_back(seed);
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(f, c);
+        if (g >= 0 && component[g] < 0) {
+          component[g] = count;
+          stack.push_back(g);
+        }
+      }
+    }
+    ++count;
+  }
+  return count;
+}
+
+Eigen::VectorXd face_areas(const TriangleMesh& mesh) {
+  Eigen::VectorXd areas(mesh.num_faces());
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0));
+    const Eigen::Vector3d b = mesh.V.row(mesh.F(f, 1));
+    const Eigen::Vector3d c = mesh.V.row(mesh.F(f, 2));
+    areas[f] = 0.5 * (b - a).cross(c - a).norm();
+  }
+  return areas;
+}
+
+double bounding_box_diagonal(const TriangleMesh& mesh) {
+  if (mesh.V.rows() == 0) return 0.0;
+  return (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
+}
+
+}  // namespace idealize

@@ -1,0 +1,81 @@
+#include "mesh_preparation.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+#include <unordered_map>
+
+namespace idealize {
+
+namespace {
+
+struct TripleHash {
+  size_t operator()(const std::array<int, 3>& t) const {
+    size_t h = static_cast<size_t>(t[0]) * 0x9E3779B97F4A7C15ull;
+    h ^= static_cast<size_t>(t[1]) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+    h ^= static_cast<size_t>(t[2]) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+    return h;
+  }
+};
+
+}  // namespace
+
+PreparedMesh prepare_mesh(const TriangleMesh& input) {
+  const int nv = input.num_vertices();
+  const int nf = input.num_faces();
+  if (nf == 0) throw MeshError("the mesh has no triangles");
+  if (!input.V.allFinite()) throw MeshError("vertex coordinates contain NaN or infinity");
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c)
+      if (input.F(f, c) < 0 || input.F(f, c) >= nv)
+        throw MeshError("triangle " + std::to_string(f) + " refers to vertex " +
+                        std::to_string(input.F(f, c)) + ", but the mesh has " + std::to_string(nv) +
+                        " vertices");
+
+  PreparedMesh out;
+  // A triangle is degenerate when its area vanishes at the precision of the coordinates.
+  const double diagonal = bounding_box_diagonal(input);
+  const double zero_area = 1e-14 * diagonal * diagonal;
+  std::unordered_map<std::array<int, 3>, int, TripleHash> seen;  // sorted vertex triple -> working face
+  seen.reserve(nf);
+  std::vector<int> kept;
+  kept.reserve(nf);
+  out.input_face.assign(nf, -1);
+  for (int f = 0; f < nf; ++f) {
+    const int a = input.F(f, 0), b = input.F(f, 1), c = input.F(f, 2);
+    const Eigen::Vector3d pa = input.V.row(a), pb = input.V.row(b), pc = input.V.row(c);
+    if (a == b || b == c || a == c || 0.5 * (pb - pa).cross(pc - pa).norm() <= zero_area) {
+      ++out.removed_degenerate;
+      continue;
+    }
+    std::array<int, 3> key{a, b, c};
+    std::sort(key.begin(), key.end());
+    const auto [it, inserted] = seen.emplace(key, static_cast<int>(kept.size()));
+    out.input_face[f] = it->second;
+    if (!inserted) {
+      ++out.removed_duplicate;
+      continue;
+    }
+    kept.push_back(f);
+  }
+  if (kept.empty()) throw MeshError("every triangle of the mesh is degenerate (zero area)");
+
+  std::vector<int> new_index(nv, -1);
+  int used = 0;
+  for (int f : kept)
+    for (int c = 0; c < 3; ++c)
+      if (new_index[input.F(f, c)] < 0) new_index[input.F(f, c)] = used++;
+  out.removed_unused_vertices = nv - used;
+
+  out.mesh.V.resize(used, 3);
+  for (int v = 0; v < nv; ++v)
+    if (new_index[v] >= 0) out.mesh.V.row(new_index[v]) = input.V.row(v);
+  out.mesh.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
+  for (size_t i = 0; i < kept.size(); ++i)
+    for (int c = 0; c < 3; ++c) out.mesh.F(i, c) = new_index[input.F(kept[i], c)];
+  out.face_origin = std::move(kept);
+  return out;
+}
+
+}  // namespace idealize

@@ -1,0 +1,225 @@
+#include "refinement.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <queue>
+#include <tuple>
+
+namespace idealize {
+
+namespace {
+
+constexpr int kBoundary = -1;  // no face across: may be split on one side
+constexpr int kFrozen = -2;    // non-manifold or orientation flip across: never touched
+
+double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology) {
+  std::vector<double> lengths(topology.num_edges());
+  for (int e = 0; e < topology.num_edges(); ++e) {
+    const auto& ev = topology.edge_vertices(e);
+    lengths[e] = (mesh.V.row(ev[0]) - mesh.V.row(ev[1])).norm();
+  }
+  if (lengths.empty()) return 0.0;
+  auto middle = lengths.begin() + lengths.size() / 2;
+  std::nth_element(lengths.begin(), middle, lengths.end());
+  return *middle;
+}
+
+// A triangle mesh that supports edge split and flip, with face-to-face adjacency kept per corner:
+// neighbor[f][c] is the face across the edge opposite corner c of face f.
+class Refiner {
+ public:
+  Refiner(const TriangleMesh& mesh, const MeshTopology& topology) {
+    for (int v = 0; v < mesh.num_vertices(); ++v) points_.push_back(mesh.V.row(v).transpose());
+    faces_.resize(mesh.num_faces());
+    neighbors_.resize(mesh.num_faces());
+    origin_.resize(mesh.num_faces());
+    for (int f = 0; f < mesh.num_faces(); ++f) {
+      origin_[f] = f;
+      for (int c = 0; c < 3; ++c) faces_[f][c] = mesh.F(f, c);
+    }
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int e = topology.face_edge(f, c);
+        const int g = topology.face_neighbor(f, c);
+        if (topology.edge_face_count(e) == 1) {
+          neighbors_[f][c] = kBoundary;
+        } else if (g < 0 || corner_of_edge(g, vertex(f, c + 2), vertex(f, c + 1)) < 0) {
+          neighbors_[f][c] = kFrozen;  // more than two faces, or the neighbour runs the edge the same way
+        } else {
+          neighbors_[f][c] = g;
+        }
+      }
+  }
+
+  void split_long_edges(double max_length) {
+    struct Entry {
+      double squared;
+      int face, a, b;  // the directed edge a→b of face
+      bool operator<(const Entry& o) const {  // longest first; ties by face, then vertices
+        return std::tie(squared, o.face, o.a, o.b) < std::tie(o.squared, face, a, b);
+      }
+    };
+    std::priority_queue<Entry> queue;
+    const double max_squared = max_length * max_length;
+    auto push = [&](int f) {
+      for (int c = 0; c < 3; ++c) {
+        if (neighbors_[f][c] == kFrozen) continue;
+        const int a = vertex(f, c + 1), b = vertex(f, c + 2);
+        const double squared = (points_[a] - points_[b]).squaredNorm();
+        if (squared > max_squared) queue.push({squared, f, a, b});
+      }
+    };
+    for (int f = 0; f < static_cast<int>(faces_.size()); ++f) push(f);
+    while (!queue.empty()) {
+      const Entry top = queue.top();
+      queue.pop();
+      const int c = corner_of_edge(top.face, top.a, top.b);
+      if (c < 0) continue;  // already split from the other side, or moved to a new face (re-queued there)
+      for (int face : split(top.face, c))
+        if (face >= 0) push(face);
+    }
+  }
+
+  // Delaunay flips between faces of the same input triangle (coplanar by construction).
+  void flip_to_delaunay() {
+    for (int pass = 0; pass < 100; ++pass) {
+      bool flipped = false;
+      for (int f = 0; f < static_cast<int>(faces_.size()); ++f)
+        for (int c = 0; c < 3; ++c) {
+          const int g = neighbors_[f][c];
+          if (g <= f || origin_[g] != origin_[f]) continue;
+          if (!locally_delaunay(f, c)) {
+            flip(f, c);
+            flipped = true;
+          }
+        }
+      if (!flipped) break;
+    }
+  }
+
+  RefinedMesh result() const {
+    RefinedMesh out;
+    out.mesh.V.resize(static_cast<Eigen::Index>(points_.size()), 3);
+    for (size_t v = 0; v < points_.size(); ++v) out.mesh.V.row(v) = points_[v].transpose();
+    out.mesh.F.resize(static_cast<Eigen::Index>(faces_.size()), 3);
+    for (size_t f = 0; f < faces_.size(); ++f)
+      for (int c = 0; c < 3; ++c) out.mesh.F(f, c) = faces_[f][c];
+    out.face_origin = origin_;
+    return out;
+  }
+
+ private:
+  int vertex(int f, int c) const { return faces_[f][c % 3]; }
+
+  // Corner of face g opposite the directed edge a→b, or -1.
+  int corner_of_edge(int g, int a, int b) const {
+    for (int c = 0; c < 3; ++c)
+      if (vertex(g, c + 1) == a && vertex(g, c + 2) == b) return c;
+    return -1;
+  }
+
+  void replace_neighbor(int face, int old_face, int new_face) {
+    if (face < 0) return;
+    for (int c = 0; c < 3; ++c)
+      if (neighbors_[face][c] == old_face) neighbors_[face][c] = new_face;
+  }
+
+  // Rotates face f so that corner c becomes corner 0.
+  void rotate_to(int f, int c) {
+    std::rotate(faces_[f].begin(), faces_[f].begin() + c, faces_[f].end());
+    std::rotate(neighbors_[f].begin(), neighbors_[f].begin() + c, neighbors_[f].end());
+  }
+
+  int add_face(const std::array<int, 3>& face, const std::array<int, 3>& neighbors, int origin) {
+    faces_.push_back(face);
+    neighbors_.push_back(neighbors);
+    origin_.push_back(origin);
+    return static_cast<int>(faces_.size()) - 1;
+  }
+
+  // Splits the edge opposite corner c of face f at its midpoint; returns the faces touched.
+  std::array<int, 4> split(int f, int c) {
+    rotate_to(f, c);
+    const int x = faces_[f][0], a = faces_[f][1], b = faces_[f][2];
+    const int g = neighbors_[f][0];
+    const int m = static_cast<int>(points_.size());
+    points_.push_back(0.5 * (points_[a] + points_[b]));
+    const int f_opposite_a = neighbors_[f][1], f_opposite_b = neighbors_[f][2];
+    const int f2 = add_face({x, m, b}, {kBoundary, f_opposite_a, f}, origin_[f]);
+    replace_neighbor(f_opposite_a, f, f2);
+    faces_[f] = {x, a, m};
+    neighbors_[f] = {kBoundary, f2, f_opposite_b};
+    if (g < 0) return {f, f2, -1, -1};
+
+    rotate_to(g, corner_of_edge(g, b, a));
+    const int y = faces_[g][0];
+    const int g_opposite_b = neighbors_[g][1], g_opposite_a = neighbors_[g][2];
+    const int g2 = add_face({y, m, a}, {f, g_opposite_b, g}, origin_[g]);
+    replace_neighbor(g_opposite_b, g, g2);
+    faces_[g] = {y, b, m};
+    neighbors_[g] = {f2, g2, g_opposite_a};
+    neighbors_[f][0] = g2;
+    neighbors_[f2][0] = g;
+    return {f, f2, g, g2};
+  }
+
+  bool locally_delaunay(int f, int c) const {
+    const int g = neighbors_[f][c];
+    const int x = vertex(f, c), a = vertex(f, c + 1), b = vertex(f, c + 2);
+    const int y = vertex(g, corner_of_edge(g, b, a));
+    auto cot = [&](int apex, int p, int q) {
+      const Eigen::Vector3d u = points_[p] - points_[apex], v = points_[q] - points_[apex];
+      return u.dot(v) / u.cross(v).norm();
+    };
+    // Sum of opposite angles at most π, with slack so that cocircular quads do not flip forever.
+    return cot(x, a, b) + cot(y, b, a) >= -1e-12;
+  }
+
+  void flip(int f, int c) {
+    rotate_to(f, c);
+    const int g = neighbors_[f][0];
+    const int x = faces_[f][0], a = faces_[f][1], b = faces_[f][2];
+    rotate_to(g, corner_of_edge(g, b, a));
+    const int y = faces_[g][0];
+    const int f_opposite_a = neighbors_[f][1], f_opposite_b = neighbors_[f][2];
+    const int g_opposite_b = neighbors_[g][1], g_opposite_a = neighbors_[g][2];
+    faces_[f] = {x, a, y};
+    neighbors_[f] = {g_opposite_b, g, f_opposite_b};
+    faces_[g] = {x, y, b};
+    neighbors_[g] = {g_opposite_a, f_opposite_a, f};
+    replace_neighbor(g_opposite_b, g, f);
+    replace_neighbor(f_opposite_a, f, g);
+  }
+
+  std::vector<Eigen::Vector3d> points_;
+  std::vector<std::array<int, 3>> faces_;
+  std::vector<std::array<int, 3>> neighbors_;
+  std::vector<int> origin_;
+};
+
+}  // namespace
+
+RefinedMesh refine_long_triangles(const TriangleMesh& mesh, const MeshTopology& topology,
+                                  const RefinementOptions& options) {
+  const double area = face_areas(mesh).sum();
+  constexpr double kEquilateralArea = 0.43301270189221935;  // area of a unit equilateral triangle
+  double target = options.target_edge_length;
+  if (target <= 0.0) {
+    const double coarsest = std::sqrt(area / (kEquilateralArea * options.min_samples));
+    target = std::min(median_edge_length(mesh, topology), coarsest);
+  }
+  const double finest = std::sqrt(area / (kEquilateralArea * options.max_triangles));
+  target = std::max(target, finest);
+
+  Refiner refiner(mesh, topology);
+  if (target > 0.0) {
+    refiner.split_long_edges(4.0 / 3.0 * target);  // Botsch & Kobbelt's split threshold
+    refiner.flip_to_delaunay();
+  }
+  RefinedMesh out = refiner.result();
+  out.target_edge_length = target;
+  return out;
+}
+
+}  // namespace idealize

@@ -1,0 +1,23 @@
+// Mesh surgery delegated to CGAL's Polygon Mesh Processing package (GPL-3+), kept in one
+// translation unit because its templates are heavy to compile.
+//
+// Isotropic remeshing: Botsch & Kobbelt, "A remeshing approach to multiresolution modeling",
+// SGP 2004, as implemented by CGAL::Polygon_mesh_processing::isotropic_remeshing.
+#pragma once
+
+#include "mesh.h"
+
+#include <vector>
+
+namespace idealize {
+
+// Uniform re-tessellation to `target_edge_length` (> 0) in `iterations` (>= 1) rounds, with
+// vertices projected back onto the input surface. No edge is protected, so sharp edges are
+// sampled like a scanner samples them (chamfered). Input must be a manifold triangle mesh;
+// throws MeshError otherwise.
+TriangleMesh remesh_isotropic(const TriangleMesh& mesh, double target_edge_length, int iterations);
+
+// Index of the face of `mesh` closest to each row of `points` (#P x 3), via an AABB tree.
+std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points);
+
+}  // namespace idealize

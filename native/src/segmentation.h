@@ -1,0 +1,68 @@
+// Fully automatic feature segmentation by mean-curvature histograms.
+//
+// J. S.-S. Chen and H.-Y. Feng, "Automatic prismatic feature segmentation of scanning-derived
+// meshes utilizing mean curvature histograms", Virtual and Physical Prototyping 9(1):45–61, 2014
+// (thesis ch. 3). Pass 1 cuts out the sharpest features with the two extremity peaks of the mean
+// curvature histogram; pass 2 smooths the curvature of the remaining region, rebuilds the histogram
+// and splits at every remaining valley. Triangles whose three vertices share a range form patches;
+// the others are transitions, thinned to one-triangle-wide strips.
+#pragma once
+
+#include "curvature.h"
+#include "denoising.h"
+#include "histogram.h"
+#include "mesh.h"
+#include "refinement.h"
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace idealize {
+
+struct SegmentationOptions {
+  HistogramOptions histogram;
+  RefinementOptions refinement;
+  // Pass 2 smooths the curvature values of the non-sharp region this many times (area-weighted
+  // one-ring means): the thesis's "aggressive" smoothing, moderated because denoising already
+  // removed the noise; more flattens fillets a dozen triangles wide into ramps.
+  int curvature_smoothing_iterations = 15;
+  // Feature-preserving denoising of a copy of the positions before curvature is estimated.
+  DenoisingOptions denoising;
+  // Pass 1 calls a vertex sharp when its curvature radius is below this many local edge lengths:
+  // fewer than about three edges per quarter circle cannot tell a round from a sharp edge.
+  double sharp_radius_in_edges = 2.0;
+};
+
+// What one patch is, in terms the later stages and the report use.
+enum class PatchKind { SharpConcave, SharpConvex, Smooth };
+
+struct PatchSummary {
+  int id = 0;
+  PatchKind kind = PatchKind::Smooth;
+  int input_triangles = 0;       // input faces labelled with this patch
+  double area = 0.0;             // their total area
+  double mean_curvature = 0.0;   // area-weighted mean of H over the patch
+  double range_low = 0.0, range_high = 0.0;  // histogram range of the patch's vertices
+};
+
+struct Segmentation {
+  std::vector<int> labels;             // per input face: patch id, -1 for transition/degenerate
+  std::vector<PatchSummary> patches;   // indexed by patch id
+
+  // The working mesh the analysis ran on, with its results, for the later stages.
+  RefinedMesh working;                 // prepared + refined mesh; face_origin maps to input faces
+  std::vector<int> working_labels;     // per working face
+  VertexCurvature curvature;           // of the working mesh
+  Eigen::VectorXd smoothed_mean;       // pass-2 curvature values (raw H outside the smooth region)
+  HistogramRanges histogram;           // pass-2 histogram and its ranges
+
+  int removed_degenerate = 0, removed_duplicate = 0;
+  int shells = 0, boundary_edges = 0, nonmanifold_edges = 0;  // of the prepared input
+  std::vector<std::pair<std::string, double>> timings;  // seconds per stage, in order
+};
+
+// Segments `mesh` into feature patches. Throws MeshError for unusable input.
+Segmentation segment_mesh(const TriangleMesh& mesh, const SegmentationOptions& options = {});
+
+}  // namespace idealize

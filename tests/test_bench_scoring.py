@@ -1,0 +1,125 @@
+"""Tests of the benchmark's segmentation score (bench/scoring.py) on hand-made label arrays."""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+_SPEC = importlib.util.spec_from_file_location(
+    "bench_scoring", Path(__file__).resolve().parents[1] / "bench" / "scoring.py")
+scoring = importlib.util.module_from_spec(_SPEC)
+_SPEC.loader.exec_module(scoring)
+
+
+def statuses(result):
+    return {f["face"]: f["status"] for f in result["per_face"]}
+
+
+def test_perfect_segmentation_is_all_correct():
+    gt = np.repeat([0, 1, 2], 10)
+    labels = np.repeat([7, 3, 5], 10)  # patch ids need not match face ids
+    r = scoring.score(labels, gt, np.ones(30))
+    assert (r["faces"], r["correct"], r["over"], r["under"]) == (3, 3, 0, 0)
+    assert r["patches"] == 3
+    assert r["correct_fraction"] == 1.0
+    assert statuses(r) == {0: "correct", 1: "correct", 2: "correct"}
+
+
+def test_split_face_is_over_segmented():
+    gt = np.array([0] * 10 + [1] * 10)
+    labels = np.array([0] * 5 + [1] * 5 + [2] * 10)  # face 0 split in halves
+    r = scoring.score(labels, gt, np.ones(20))
+    assert statuses(r) == {0: "over", 1: "correct"}
+    assert (r["correct"], r["over"], r["under"]) == (1, 1, 0)
+    face0 = r["per_face"][0]
+    assert face0["face_fraction"] == pytest.approx(0.5)
+    assert face0["patches_touching"] == 2
+
+
+def test_merged_faces_are_under_segmented():
+    gt = np.array([0] * 10 + [1] * 10 + [2] * 10)
+    labels = np.array([4] * 20 + [9] * 10)  # faces 0 and 1 in one patch
+    r = scoring.score(labels, gt, np.ones(30))
+    assert statuses(r) == {0: "under", 1: "under", 2: "correct"}
+    assert (r["correct"], r["over"], r["under"]) == (1, 0, 2)
+    assert r["per_face"][0]["patch_fraction"] == pytest.approx(0.5)
+
+
+def test_small_merge_below_threshold_is_still_correct():
+    # Patch 0 holds all of face 0 plus a sliver (area 2 of 12) of face 1: 10/12 = 83% >= 80%.
+    gt = np.array([0] * 10 + [1] * 10)
+    labels = np.array([0] * 12 + [1] * 8)
+    r = scoring.score(labels, gt, np.ones(20))
+    assert statuses(r) == {0: "correct", 1: "correct"}
+
+
+def test_transitions_are_not_a_patch():
+    gt = np.array([0] * 10 + [1] * 10)
+    labels = np.array([-1] * 10 + [1] * 10)  # face 0 entirely transition
+    r = scoring.score(labels, gt, np.ones(20))
+    assert statuses(r) == {0: "over", 1: "correct"}
+    assert r["per_face"][0]["best_patch"] == -1
+    assert r["patches"] == 1
+    assert r["transition_area_fraction"] == pytest.approx(0.5)
+    # Thin transitions (10% of each face) do not spoil correctness.
+    labels = np.array([-1] + [0] * 9 + [-1] + [1] * 9)
+    r = scoring.score(labels, gt, np.ones(20))
+    assert (r["correct"], r["over"], r["under"]) == (2, 0, 0)
+
+
+def test_overlap_is_measured_by_area_not_triangle_count():
+    # Face 0: one big triangle (area 9) in patch 0 and nine small ones (area 1/9 each) in patch 1.
+    gt = np.zeros(10, dtype=int)
+    labels = np.array([0] + [1] * 9)
+    areas = np.array([9.0] + [1.0 / 9.0] * 9)
+    r = scoring.score(labels, gt, areas)
+    assert r["per_face"][0]["best_patch"] == 0
+    assert r["per_face"][0]["face_fraction"] == pytest.approx(0.9)
+    assert r["correct"] == 1
+    # Weighting by count instead would make the other patch the best one.
+    r = scoring.score(labels, gt, np.ones(10))
+    assert r["per_face"][0]["best_patch"] == 1
+
+
+def test_tiny_faces_are_excluded():
+    gt = np.array([0] * 999 + [1])  # face 1 has 0.1% of the area by default weighting...
+    areas = np.ones(1000)
+    areas[-1] = 0.1  # ...now 0.01%: below 0.05%
+    labels = np.zeros(1000, dtype=int)
+    labels[-1] = 5
+    r = scoring.score(labels, gt, areas)
+    assert r["faces"] == 1 and r["excluded_faces"] == 1
+    assert statuses(r) == {0: "correct"}
+    # With no exclusion the tiny face counts (and is correct: its own patch).
+    r = scoring.score(labels, gt, areas, min_face_fraction=0.0)
+    assert r["faces"] == 2 and r["correct"] == 2
+
+
+def test_statuses_partition_scored_faces_on_random_labels():
+    rng = np.random.default_rng(1)
+    gt = rng.integers(0, 20, size=2000)
+    labels = np.where(rng.random(2000) < 0.7, gt // 2, rng.integers(-1, 15, size=2000))
+    areas = rng.random(2000)
+    r = scoring.score(labels, gt, areas)
+    assert r["correct"] + r["over"] + r["under"] == r["faces"]
+    assert r["faces"] + r["excluded_faces"] == r["gt_faces"] == 20
+    # Faces 2k and 2k+1 share patch k: nothing can be correct, all are merged.
+    assert r["correct"] == 0
+    for f in r["per_face"]:
+        assert f["best_patch"] == f["face"] // 2
+
+
+def test_input_validation():
+    with pytest.raises(ValueError):
+        scoring.score([0, 1], [0], [1.0, 1.0])
+    with pytest.raises(ValueError):
+        scoring.score([0], [0], [-1.0])
+
+
+def test_summarize_adds_counts():
+    a = scoring.score([0, 0, 1], [0, 0, 1], [1, 1, 1])
+    b = scoring.score([0, 0, 0], [0, 1, 2], [1, 1, 1])
+    s = scoring.summarize([a, b])
+    assert (s["faces"], s["correct"], s["under"], s["meshes"]) == (5, 2, 3, 2)
+    assert s["correct_fraction"] == pytest.approx(0.4)
