@@ -53,6 +53,8 @@ SECTION_END = "<!-- end: segmentation benchmark -->"
 
 SMALL_MESH = 200_000          # meshes below this many triangles are timed best of REPEATS
 REPEATS = 3
+SLOW_RUN = 2.0                # seconds: a first run slower than this is not repeated
+FREECAD_TIMEOUT = 180.0       # seconds per FreeCAD segmentation (all three surface types)
 FREECAD_TYPES = ("Plane", "Cylinder", "Sphere")
 FREECAD_DEV = 1e-3            # x diag: the usual tolerance, at the scan noise level
 FREECAD_DEV_LOOSE = 3e-3      # x diag: 3 sigma of the scan noise, a noise-aware setting
@@ -74,21 +76,25 @@ def idealize_module():
     return idealize
 
 
-def best_time(fn: Callable, repeats: int):
-    """(best wall time, result of the last call) over `repeats` calls of fn()."""
-    best, result = float("inf"), None
+def best_time(fn: Callable, repeats: int, slow: float = SLOW_RUN):
+    """(best wall time, result of the last call, calls made) over up to `repeats` calls of fn();
+    a first call slower than `slow` seconds is not repeated."""
+    best, result, calls = float("inf"), None, 0
     for _ in range(max(1, repeats)):
         start = time.perf_counter()
         result = fn()
+        calls += 1
         best = min(best, time.perf_counter() - start)
-    return best, result
+        if best > slow:
+            break
+    return best, result, calls
 
 
 def run_idealize(V: np.ndarray, F: np.ndarray, repeats: int) -> Dict:
     idealize = idealize_module()
     mesh = idealize.Mesh(V, F)
     try:
-        seconds, seg = best_time(lambda: idealize.segment(mesh), repeats)
+        seconds, seg, repeats = best_time(lambda: idealize.segment(mesh), repeats)
     except Exception as exc:  # report, never abort the benchmark
         return {"ok": False, "error": f"{type(exc).__name__}: {exc}", "labels": np.full(len(F), -1, np.int64)}
     labels = np.asarray(seg.labels).astype(np.int64)
@@ -104,9 +110,10 @@ def freecad_min_facets(num_triangles: int) -> int:
     return max(3, num_triangles // 2000)
 
 
-def run_freecad(V: np.ndarray, F: np.ndarray, diag: float, dev_rel: float, repeats: int) -> Dict:
+def freecad_segment(V: np.ndarray, F: np.ndarray, diag: float, dev_rel: float, repeats: int) -> Dict:
     """FreeCAD's Mesh.getSegmentsOfType for Plane, Cylinder, Sphere with tolerance dev_rel*diag;
-    segments become patches first come first served (planes first, then cylinders, spheres)."""
+    segments become patches first come first served (planes first, then cylinders, spheres).
+    Runs in this process; see run_freecad for the time-limited version."""
     _, _, Mesh, _ = datasets.freecad_modules()
     start = time.perf_counter()
     mesh = Mesh.Mesh(V[F].tolist())
@@ -121,7 +128,7 @@ def run_freecad(V: np.ndarray, F: np.ndarray, diag: float, dev_rel: float, repea
         return [(t, mesh.getSegmentsOfType(t, dev, min_facets)) for t in FREECAD_TYPES]
 
     try:
-        seconds, found = best_time(segment, repeats)
+        seconds, found, repeats = best_time(segment, repeats)
     except Exception as exc:
         return {"ok": False, "error": f"{type(exc).__name__}: {exc}", "labels": np.full(len(F), -1, np.int64)}
     labels = np.full(len(F), -1, dtype=np.int64)
@@ -138,6 +145,42 @@ def run_freecad(V: np.ndarray, F: np.ndarray, diag: float, dev_rel: float, repea
             patch_types.append(surface)
     return {"ok": True, "seconds": seconds, "build_seconds": build, "repeats": repeats, "labels": labels,
             "dev": dev, "dev_rel": dev_rel, "min_facets": min_facets, "segments": segments}
+
+
+def freecad_worker(path_in: str, path_out: str) -> None:
+    """Child process: FreeCAD segmentation of the mesh in path_in, result to path_out (npz)."""
+    with np.load(path_in) as z:
+        V, F = z["V"], z["F"]
+        diag, dev_rel, repeats = float(z["diag"]), float(z["dev_rel"]), int(z["repeats"])
+    r = freecad_segment(V, F, diag, dev_rel, repeats)
+    labels = r.pop("labels")
+    np.savez(path_out, labels=labels, result=np.array(json.dumps(r)))
+
+
+def run_freecad(V: np.ndarray, F: np.ndarray, diag: float, dev_rel: float, repeats: int,
+                timeout: float = FREECAD_TIMEOUT) -> Dict:
+    """freecad_segment in a child process that is stopped after `timeout` seconds: FreeCAD's
+    cylinder region growing refits the cylinder for every facet it tests and can run for many
+    minutes on a noisy mesh with a loose tolerance."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="idealize-bench-") as tmp:
+        path_in, path_out = os.path.join(tmp, "in.npz"), os.path.join(tmp, "out.npz")
+        np.savez(path_in, V=V, F=F, diag=diag, dev_rel=dev_rel, repeats=repeats)
+        cmd = [sys.executable, str(Path(__file__).resolve()), "--freecad-worker", path_in, path_out]
+        try:
+            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            return {"ok": False, "timeout": True, "error": f"no result after {timeout:g} s (stopped)",
+                    "dev_rel": dev_rel, "labels": np.full(len(F), -1, np.int64)}
+        if proc.returncode != 0 or not os.path.exists(path_out):
+            err = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+            return {"ok": False, "error": f"FreeCAD worker exit {proc.returncode}: {err}", "dev_rel": dev_rel,
+                    "labels": np.full(len(F), -1, np.int64)}
+        with np.load(path_out) as z:
+            r = json.loads(str(z["result"]))
+            r["labels"] = z["labels"].astype(np.int64)
+        return r
 
 
 def scored(run: Dict, gt: np.ndarray, areas: np.ndarray) -> Dict:
@@ -311,7 +354,7 @@ def bench_parts(args):
                "vertices": int(len(m.V)), "brep_faces": len(m.face_types), "face_types": m.face_types,
                "diag": m.diag, "mesh_info": m.info,
                "idealize": scored(ide, m.gt, areas), "freecad": scored(fc, m.gt, areas)}
-        if args.freecad_loose and m.variant != "cad":
+        if args.freecad_loose and m.variant == "scan":
             fcl = run_freecad(m.V, m.F, m.diag, FREECAD_DEV_LOOSE, 1)
             row["freecad_loose"] = scored(fcl, m.gt, areas)
         msg = (f"  {m.name:42s} {m.num_triangles:7d} tris  "
@@ -354,7 +397,7 @@ def scaling_worker(triangles: int) -> None:
     mesh = idealize.Mesh(m.V, m.F)
     baseline = vm_hwm_kb()
     repeats = REPEATS if m.num_triangles < SMALL_MESH else 1
-    seconds, seg = best_time(lambda: idealize.segment(mesh), repeats)
+    seconds, seg, repeats = best_time(lambda: idealize.segment(mesh), repeats)
     peak = vm_hwm_kb()
     ru_maxrss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     areas = datasets.triangle_areas(m.V, m.F)
@@ -414,7 +457,7 @@ def bench_real(args) -> List[Dict]:
             stats = datasets.edge_statistics(mesh.faces) if mesh.n_triangles else {}
             row["mesh_info"] = stats
             repeats = REPEATS if mesh.n_triangles < SMALL_MESH else 1
-            seconds, seg = best_time(lambda: idealize.segment(mesh), repeats)
+            seconds, seg, repeats = best_time(lambda: idealize.segment(mesh), repeats)
             labels = np.asarray(seg.labels)
             areas = mesh.triangle_areas()
             row.update({"ok": True, "seconds": seconds, "repeats": repeats, "features": len(seg.features),
@@ -488,8 +531,10 @@ def _pct(a: int, b: int) -> str:
 
 def _sum(rows: List[Dict], method: str) -> Dict:
     ok = [r for r in rows if r.get(method, {}).get("ok")]
-    s = scoring.summarize([r[method]["score"] for r in ok]) if ok else scoring.summarize([])
+    # Failed or stopped runs keep their score with every triangle unassigned: all faces "over".
+    s = scoring.summarize([r[method]["score"] for r in rows if method in r])
     s["failed"] = sum(1 for r in rows if method in r and not r[method].get("ok"))
+    s["timeouts"] = sum(1 for r in rows if method in r and r[method].get("timeout"))
     s["seconds"] = float(sum(r[method]["seconds"] for r in ok))
     s["median_seconds"] = float(np.median([r[method]["seconds"] for r in ok])) if ok else 0.0
     return s
@@ -545,7 +590,8 @@ def markdown(results: Dict) -> str:
         "80 %), *under* = merged (its best patch is mostly elsewhere). Faces under 0.05 % of the area are not "
         f"scored. FreeCAD: `Mesh.getSegmentsOfType` for {', '.join(FREECAD_TYPES)} with tolerance "
         f"{p['freecad_dev'] * 100:g} % of the diagonal and min facets = max(3, triangles/2000), segments "
-        "taken first come first served. Times are wall-clock, best of 3 below 200k triangles.")
+        "taken first come first served. Times are wall-clock, best of 3 (single runs above 200k triangles or "
+        f"{SLOW_RUN:g} s).")
     add("")
 
     summary = results.get("summary", {})
@@ -566,16 +612,18 @@ def markdown(results: Dict) -> str:
                 f"{f.get('patches', 0)} | {f.get('seconds', 0):.2f} s | {ratio_text} |")
         add("")
         add("*patches*: all patches found (ground truth: the scored faces column). Times are sums over the "
-            "variant's meshes. Failed runs (counted as all-wrong above): "
+            "variant's meshes that ran to completion. Failed runs (every face counted as missed above): "
             + ", ".join(f"{v}: idealize {e.get('idealize', {}).get('failed', 0)}, FreeCAD "
                         f"{e.get('freecad', {}).get('failed', 0)}" for v, e in summary.items()) + ".")
         add("")
         loose = {v: e["freecad_loose"] for v, e in summary.items() if "freecad_loose" in e}
         if loose:
             add(f"FreeCAD with a noise-aware tolerance of {p['freecad_dev_loose'] * 100:g} % of the diagonal "
-                "(3 σ of the scan noise; single timing): "
+                "(3 σ of the scan noise; single timing; scan variant only): "
                 + "; ".join(f"{v}: {e['correct']}/{e['faces']} correct ({_pct(e['correct'], e['faces'])}), "
                             f"{e['over']} over, {e['under']} under, {e['patches']} patches, {e['seconds']:.1f} s"
+                            + (f", {e['timeouts']} of {e['meshes']} runs stopped after {p['freecad_timeout']:g} s "
+                               "(counted as all faces missed)" if e["timeouts"] else "")
                             for v, e in loose.items()) + ".")
             add("")
 
@@ -703,10 +751,14 @@ def main(argv=None) -> int:
     parser.add_argument("--markdown-only", action="store_true",
                         help="rewrite the Markdown from bench/results/segmentation.json without running")
     parser.add_argument("--scaling-worker", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--freecad-worker", nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
 
     if args.scaling_worker:
         scaling_worker(args.scaling_worker)
+        return 0
+    if args.freecad_worker:
+        freecad_worker(*args.freecad_worker)
         return 0
 
     if args.markdown_only:
@@ -732,8 +784,9 @@ def main(argv=None) -> int:
             "fine_linear_deflection": datasets.FINE_LINEAR_DEFLECTION,
             "fine_angular_deflection": datasets.FINE_ANGULAR_DEFLECTION,
             "freecad_dev": FREECAD_DEV, "freecad_dev_loose": FREECAD_DEV_LOOSE,
-            "freecad_types": list(FREECAD_TYPES), "min_face_fraction": 0.0005, "threshold": scoring.THRESHOLD,
-            "repeats_below_triangles": SMALL_MESH, "repeats": REPEATS,
+            "freecad_types": list(FREECAD_TYPES), "freecad_timeout": FREECAD_TIMEOUT,
+            "min_face_fraction": 0.0005, "threshold": scoring.THRESHOLD,
+            "repeats_below_triangles": SMALL_MESH, "repeats": REPEATS, "no_repeat_above_seconds": SLOW_RUN,
         },
         "partial": partial,
     }

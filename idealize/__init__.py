@@ -8,8 +8,9 @@ Console use (plain Python or FreeCAD)::
     seg.labels        # one patch id per input triangle, -1 on transitions
     seg.features      # one summary dict per patch
 """
+from .curvature import vertex_curvature
 from .mesh import Mesh, MeshError, load_mesh
 from .segmentation import Segmentation, segment
 
-__all__ = ["Mesh", "MeshError", "load_mesh", "Segmentation", "segment"]
+__all__ = ["Mesh", "MeshError", "load_mesh", "Segmentation", "segment", "vertex_curvature"]
 __version__ = "0.1.0"

@@ -25,8 +25,8 @@ def convert(args):
     report = build_report(mesh, seg, timings, step)
     if args.report:
         write_report(report, args.report)
-    print("%s: %d triangles, %d features, %d transition triangles, %.3f s"
-          % (args.input, mesh.n_triangles, seg.n_features, int((seg.labels < 0).sum()), timings["total"]))
+    print("%s: %d triangles, %d features, %.3f s"
+          % (args.input, mesh.n_triangles, seg.n_features, timings["total"]))
     if args.report:
         print("report written to %s" % args.report)
     print("note: " + NO_STEP_YET + " (%s not created)" % args.output, file=sys.stderr)

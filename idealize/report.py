@@ -20,6 +20,7 @@ def build_report(mesh, segmentation, timings, step):
             "duplicate_triangles_merged": int(segmentation.removed_duplicate),
         },
         "labels": segmentation.labels,
+        "transition_triangles": np.flatnonzero(segmentation.transition),
         "features": [_feature(f) for f in segmentation.features],
         "timings": {name: round(float(seconds), 6) for name, seconds in timings.items()},
         "step": step,
@@ -43,11 +44,11 @@ def _finite_or_none(value):
 
 
 def write_report(report, path):
-    """Pretty JSON, but the per-triangle labels on one line so that large meshes stay readable."""
-    labels = report["labels"]
-    body = dict(report, labels="@LABELS@")
+    """Pretty JSON, with the per-triangle arrays on one line each so that large meshes stay readable."""
+    body = dict(report, labels="@labels@", transition_triangles="@transition_triangles@")
     text = json.dumps(body, indent=2)
-    text = text.replace('"@LABELS@"', "[" + ",".join(map(str, np.asarray(labels).tolist())) + "]")
+    for key in ("labels", "transition_triangles"):
+        text = text.replace('"@%s@"' % key, "[" + ",".join(map(str, np.asarray(report[key]).tolist())) + "]")
     with open(path, "w", encoding="utf-8") as handle:
         handle.write(text)
         handle.write("\n")

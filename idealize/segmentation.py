@@ -8,8 +8,10 @@ from .mesh import Mesh, MeshError
 class Segmentation:
     """Result of :func:`segment`.
 
-    labels: (M,) int32, one patch id per input triangle in input order, -1 on transition
-    (border) triangles and on degenerate ones.
+    labels: (M,) int32, one patch id per input triangle in input order; -1 only on degenerate
+    triangles and where no patch can be reached. The one-triangle-wide transition strips that
+    border the patches are folded into them, so patches meet along edge polylines.
+    transition: (M,) bool, the triangles that formed those strips before folding.
     features: list of dicts, one per patch: id, kind ("smooth", "sharp_convex", "sharp_concave"),
     triangles, area, mean_curvature, curvature_range.
     timings: seconds per stage.
@@ -18,6 +20,7 @@ class Segmentation:
 
     def __init__(self, result):
         self.labels = result.pop("labels")
+        self.transition = result.pop("transition")
         self.features = result.pop("patches")
         self.timings = dict(result.pop("timings"))
         self.removed_degenerate = result.pop("removed_degenerate")
@@ -31,9 +34,8 @@ class Segmentation:
         return len(self.features)
 
     def __repr__(self):
-        transition = int(np.count_nonzero(self.labels < 0))
-        return "<idealize.Segmentation %d features, %d of %d triangles on transitions>" % (
-            self.n_features, transition, len(self.labels))
+        return "<idealize.Segmentation %d features, %d of %d triangles on transition strips>" % (
+            self.n_features, int(np.count_nonzero(self.transition)), len(self.labels))
 
 
 def segment(mesh):

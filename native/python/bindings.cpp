@@ -52,6 +52,7 @@ py::dict histogram_dict(const HistogramRanges& ranges) {
 py::dict segmentation_dict(Segmentation&& s) {
   py::dict d;
   d["labels"] = to_array(s.labels);
+  d["transition"] = Eigen::Map<const Eigen::Matrix<char, Eigen::Dynamic, 1>>(s.transition.data(), static_cast<Eigen::Index>(s.transition.size())).cast<bool>().eval();
   py::list patches;
   for (const PatchSummary& p : s.patches) {
     py::dict patch;
@@ -74,7 +75,7 @@ py::dict segmentation_dict(Segmentation&& s) {
   d["working_face_origin"] = to_array(s.working.face_origin);
   d["working_labels"] = to_array(s.working_labels);
   d["working_target_edge_length"] = s.working.target_edge_length;
-  d["mean_curvature"] = std::move(s.curvature.mean);
+  d["mean_curvature"] = std::move(s.mean_curvature);
   d["smoothed_mean_curvature"] = std::move(s.smoothed_mean);
   d["histogram"] = histogram_dict(s.histogram);
   d["shells"] = s.shells;
@@ -87,7 +88,7 @@ py::dict segmentation_dict(Segmentation&& s) {
 
 PYBIND11_MODULE(_native, m) {
   m.doc() = "Idealize native core: mesh reading, curvature, feature segmentation.";
-  static py::exception<MeshError> mesh_error(m, "MeshError", PyExc_ValueError);
+  py::register_exception<MeshError>(m, "MeshError", PyExc_ValueError);
   py::register_exception<Cancelled>(m, "Cancelled", PyExc_KeyboardInterrupt);
 
   m.def(

@@ -8,6 +8,8 @@ namespace idealize {
 
 namespace {
 
+constexpr double kCoplanar = 1e-9;  // normal difference of faces coplanar up to rounding
+
 struct FaceGeometry {
   MatrixX3d normal, centroid;
   Eigen::VectorXd area;
@@ -50,15 +52,17 @@ void face_rings(const TriangleMesh& mesh, const MeshTopology& topology, std::vec
   }
 }
 
-}  // namespace
 
-MatrixX3d denoised_positions(const TriangleMesh& mesh, const MeshTopology& topology,
-                             const DenoisingOptions& options) {
+// Bilateral filtering of the face normals (Zheng et al., eq. 4).
+MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& topology,
+                                const DenoisingOptions& options) {
   const int nf = mesh.num_faces();
   FaceGeometry g = face_geometry(mesh.V, mesh.F);
 
   // Kernel widths from the data, over all pairs of faces that share a vertex: spatial = their mean
-  // centroid distance; range = a multiple of their median normal difference.
+  // centroid distance; range = a multiple of their median normal difference, counting only pairs
+  // that are not coplanar: on scans that is the noise, on CAD tessellations the facet folds of
+  // curved faces (coplanar pairs inside flat faces say nothing about either).
   std::vector<int> offsets, ring;
   face_rings(mesh, topology, offsets, ring);
   std::vector<double> normal_jumps, distances(ring.size());
@@ -68,15 +72,16 @@ MatrixX3d denoised_positions(const TriangleMesh& mesh, const MeshTopology& topol
     for (int k = offsets[f]; k < offsets[f + 1]; ++k) {
       distances[k] = (g.centroid.row(f) - g.centroid.row(ring[k])).norm();
       if (ring[k] == f) continue;
-      normal_jumps.push_back((g.normal.row(f) - g.normal.row(ring[k])).norm());
       centroid_distance += distances[k];
+      const double jump = (g.normal.row(f) - g.normal.row(ring[k])).norm();
+      if (jump > kCoplanar) normal_jumps.push_back(jump);
     }
-  if (normal_jumps.empty()) return mesh.V;
-  centroid_distance /= static_cast<double>(normal_jumps.size());
+  if (normal_jumps.empty()) return g.normal;  // a flat mesh: nothing to filter
+  centroid_distance /= static_cast<double>(ring.size() - nf);
   auto middle = normal_jumps.begin() + normal_jumps.size() / 2;
   std::nth_element(normal_jumps.begin(), middle, normal_jumps.end());
   const double sigma_range = options.range_factor * *middle;
-  if (!(sigma_range > 0.0) || !(centroid_distance > 0.0)) return mesh.V;  // no noise to remove
+  if (!(sigma_range > 0.0) || !(centroid_distance > 0.0)) return g.normal;
 
   std::vector<double> spatial(ring.size());
   for (size_t k = 0; k < ring.size(); ++k)
@@ -98,11 +103,16 @@ MatrixX3d denoised_positions(const TriangleMesh& mesh, const MeshTopology& topol
     normals.swap(next);
   }
 
-  // Move each vertex so that its faces agree with the filtered normals (Zheng et al., eq. 7).
+  return normals;
+}
+
+// Moves each vertex so that its faces agree with the filtered normals (Zheng et al., eq. 7).
+MatrixX3d positions_fitting_normals(const TriangleMesh& mesh, const MeshTopology& topology,
+                                    const MatrixX3d& normals, int iterations) {
   MatrixX3d V = mesh.V, delta(V.rows(), 3);
-  for (int it = 0; it < options.vertex_iterations; ++it) {
+  for (int it = 0; it < iterations; ++it) {
     delta.setZero();
-    for (int f = 0; f < nf; ++f) {
+    for (int f = 0; f < mesh.num_faces(); ++f) {
       const Eigen::RowVector3d centroid = (V.row(mesh.F(f, 0)) + V.row(mesh.F(f, 1)) + V.row(mesh.F(f, 2))) / 3.0;
       for (int c = 0; c < 3; ++c) {
         const int v = mesh.F(f, c);
@@ -115,6 +125,14 @@ MatrixX3d denoised_positions(const TriangleMesh& mesh, const MeshTopology& topol
     }
   }
   return V;
+}
+
+}  // namespace
+
+MatrixX3d denoised_positions(const TriangleMesh& mesh, const MeshTopology& topology,
+                             const DenoisingOptions& options) {
+  const MatrixX3d normals = filtered_face_normals(mesh, topology, options);
+  return positions_fitting_normals(mesh, topology, normals, options.vertex_iterations);
 }
 
 }  // namespace idealize

@@ -52,7 +52,9 @@ class Refiner {
       }
   }
 
-  void split_long_edges(double max_length) {
+  // Splits, longest first, every edge longer than max_length (at most until `max_faces` faces).
+  void split_long_edges(double max_length, size_t max_faces) {
+    mark_stuck_faces(max_length);
     struct Entry {
       double squared;
       int face, a, b;  // the directed edge a→b of face
@@ -62,16 +64,20 @@ class Refiner {
     };
     std::priority_queue<Entry> queue;
     const double max_squared = max_length * max_length;
+    auto splittable = [&](int f, int c) {
+      const int g = neighbors_[f][c];
+      return g != kFrozen && !stuck_[f] && (g < 0 || !stuck_[g]);
+    };
     auto push = [&](int f) {
       for (int c = 0; c < 3; ++c) {
-        if (neighbors_[f][c] == kFrozen) continue;
+        if (!splittable(f, c)) continue;
         const int a = vertex(f, c + 1), b = vertex(f, c + 2);
         const double squared = (points_[a] - points_[b]).squaredNorm();
         if (squared > max_squared) queue.push({squared, f, a, b});
       }
     };
     for (int f = 0; f < static_cast<int>(faces_.size()); ++f) push(f);
-    while (!queue.empty()) {
+    while (!queue.empty() && faces_.size() < max_faces) {
       const Entry top = queue.top();
       queue.pop();
       const int c = corner_of_edge(top.face, top.a, top.b);
@@ -89,7 +95,7 @@ class Refiner {
         for (int c = 0; c < 3; ++c) {
           const int g = neighbors_[f][c];
           if (g <= f || origin_[g] != origin_[f]) continue;
-          if (!locally_delaunay(f, c)) {
+          if (should_flip(f, c)) {
             flip(f, c);
             flipped = true;
           }
@@ -112,6 +118,27 @@ class Refiner {
  private:
   int vertex(int f, int c) const { return faces_[f][c % 3]; }
 
+  // A face with a long edge that may not be split can never get short edges (the other two add up
+  // to at least its length), and neither can the faces across its long edges: such faces are left
+  // as they are. Computed once; faces made by splitting are never stuck.
+  void mark_stuck_faces(double max_length) {
+    stuck_.assign(faces_.size(), 0);
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (size_t f = 0; f < faces_.size(); ++f) {
+        if (stuck_[f]) continue;
+        for (int c = 0; c < 3 && !stuck_[f]; ++c) {
+          const int g = neighbors_[f][c];
+          const bool blocked = g == kFrozen || (g >= 0 && stuck_[g]);
+          if (blocked && (points_[vertex(f, c + 1)] - points_[vertex(f, c + 2)]).norm() > max_length) {
+            stuck_[f] = 1;
+            changed = true;
+          }
+        }
+      }
+    }
+  }
+
   // Corner of face g opposite the directed edge a→b, or -1.
   int corner_of_edge(int g, int a, int b) const {
     for (int c = 0; c < 3; ++c)
@@ -132,6 +159,7 @@ class Refiner {
   }
 
   int add_face(const std::array<int, 3>& face, const std::array<int, 3>& neighbors, int origin) {
+    stuck_.push_back(0);
     faces_.push_back(face);
     neighbors_.push_back(neighbors);
     origin_.push_back(origin);
@@ -164,17 +192,31 @@ class Refiner {
     return {f, f2, g, g2};
   }
 
-  bool locally_delaunay(int f, int c) const {
+  // True when flipping the edge opposite corner c of face f to the other diagonal is valid and
+  // makes it locally Delaunay: opposite angles summing to more than π (with slack, so that
+  // cocircular quads do not flip forever), a convex quad, and a diagonal that is not an edge yet.
+  bool should_flip(int f, int c) const {
     const int g = neighbors_[f][c];
     const int x = vertex(f, c), a = vertex(f, c + 1), b = vertex(f, c + 2);
-    const int y = vertex(g, corner_of_edge(g, b, a));
+    const int cg = corner_of_edge(g, b, a);
+    if (cg < 0) return false;
+    const int y = vertex(g, cg);
+    if (x == y) return false;
+    for (int k = 1; k <= 2; ++k)
+      for (int h : {neighbors_[f][(c + k) % 3], neighbors_[g][(cg + k) % 3]})
+        if (h >= 0 && contains(h, x) && contains(h, y)) return false;
     auto cot = [&](int apex, int p, int q) {
       const Eigen::Vector3d u = points_[p] - points_[apex], v = points_[q] - points_[apex];
       return u.dot(v) / u.cross(v).norm();
     };
-    // Sum of opposite angles at most π, with slack so that cocircular quads do not flip forever.
-    return cot(x, a, b) + cot(y, b, a) >= -1e-12;
+    if (cot(x, a, b) + cot(y, b, a) >= -1e-12) return false;
+    const Eigen::Vector3d normal = (points_[a] - points_[x]).cross(points_[b] - points_[x]);
+    const Eigen::Vector3d first = (points_[a] - points_[x]).cross(points_[y] - points_[x]);
+    const Eigen::Vector3d second = (points_[y] - points_[x]).cross(points_[b] - points_[x]);
+    return first.dot(normal) > 0.0 && second.dot(normal) > 0.0;
   }
+
+  bool contains(int f, int v) const { return faces_[f][0] == v || faces_[f][1] == v || faces_[f][2] == v; }
 
   void flip(int f, int c) {
     rotate_to(f, c);
@@ -196,6 +238,7 @@ class Refiner {
   std::vector<std::array<int, 3>> faces_;
   std::vector<std::array<int, 3>> neighbors_;
   std::vector<int> origin_;
+  std::vector<char> stuck_;
 };
 
 }  // namespace
@@ -214,7 +257,7 @@ RefinedMesh refine_long_triangles(const TriangleMesh& mesh, const MeshTopology& 
 
   Refiner refiner(mesh, topology);
   if (target > 0.0) {
-    refiner.split_long_edges(4.0 / 3.0 * target);  // Botsch & Kobbelt's split threshold
+    refiner.split_long_edges(4.0 / 3.0 * target, static_cast<size_t>(options.max_triangles));  // Botsch & Kobbelt's threshold
     refiner.flip_to_delaunay();
   }
   RefinedMesh out = refiner.result();

@@ -116,23 +116,50 @@ void dissolve_slivers(const TriangleMesh& mesh, const MeshTopology& topology, st
     if (p != kTransition && !has_core[p]) p = kTransition;
 }
 
-// Transition thinning (thesis 3.2.1.5): patches grow into transition zones, flattest triangles
-// first, as long as a triangle touches no other patch. What remains are one-triangle-wide strips
-// through the highest curvature, each of whose triangles touches two or more patches.
-void thin_transitions(const TriangleMesh& mesh, const MeshTopology& topology,
-                      const Eigen::VectorXd& mean, std::vector<int>& label) {
+// Transition thinning (thesis 3.2.1.5): patches grow into transition zones as long as a triangle
+// touches no other patch, so what remains are one-triangle-wide strips, each of whose triangles
+// touches two or more patches. The thesis grows the strip along the highest curvature; here each
+// triangle joins in order of how close its curvature is to the patch's mean, which puts the strip
+// on the crest of a sharp edge and in the middle of the curvature ramp between tangent faces
+// (growing the flattest first would let a plane swallow half of every fillet beside it).
+//
+// With `fold` set, the strips themselves are then folded into the patches (thesis 4.3, first step
+// of part 2): every transition triangle joins an edge-adjacent patch, most similar first, so that
+// patches meet along edge polylines.
+void grow_patches(const TriangleMesh& mesh, const MeshTopology& topology, const Eigen::VectorXd& curvature,
+                  int num_patches, bool fold, std::vector<int>& label) {
   constexpr int kNone = -1, kSeveral = -2;
+  auto face_curvature = [&](int f) {
+    return (curvature[mesh.F(f, 0)] + curvature[mesh.F(f, 1)] + curvature[mesh.F(f, 2)]) / 3.0;
+  };
+  std::vector<double> patch_mean(num_patches, 0.0), patch_count(num_patches, 0.0);
   std::vector<int> touching(mesh.num_vertices(), kNone);  // the one patch a vertex touches
   auto touch = [&](int v, int patch) {
     if (touching[v] == kNone) touching[v] = patch;
     else if (touching[v] != patch) touching[v] = kSeveral;
   };
   for (int f = 0; f < mesh.num_faces(); ++f)
-    if (label[f] != kTransition)
+    if (label[f] != kTransition) {
+      patch_mean[label[f]] += face_curvature(f);
+      patch_count[label[f]] += 1.0;
       for (int c = 0; c < 3; ++c) touch(mesh.F(f, c), label[f]);
+    }
+  for (int p = 0; p < num_patches; ++p)
+    if (patch_count[p] > 0.0) patch_mean[p] /= patch_count[p];
 
-  // The single patch that face f may join, or kNone.
+  // The patch that face f may join, or kNone.
   auto joinable = [&](int f) {
+    if (fold) {  // the edge-adjacent patch of most similar curvature
+      int best = kNone;
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(f, c);
+        if (g < 0 || label[g] == kTransition) continue;
+        if (best == kNone || std::abs(face_curvature(f) - patch_mean[label[g]]) <
+                                 std::abs(face_curvature(f) - patch_mean[best]))
+          best = label[g];
+      }
+      return best;
+    }
     int patch = kNone;
     for (int c = 0; c < 3; ++c) {
       const int t = touching[mesh.F(f, c)];
@@ -149,13 +176,14 @@ void thin_transitions(const TriangleMesh& mesh, const MeshTopology& topology,
     return kNone;
   };
 
-  using Entry = std::pair<double, int>;  // (average |H|, face): flattest first, ties by index
+  using Entry = std::pair<double, int>;  // (curvature difference, face): most similar first, ties by index
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-  auto priority = [&](int f) {
-    return (std::abs(mean[mesh.F(f, 0)]) + std::abs(mean[mesh.F(f, 1)]) + std::abs(mean[mesh.F(f, 2)])) / 3.0;
+  auto push = [&](int f) {
+    const int patch = joinable(f);
+    if (patch != kNone) queue.emplace(std::abs(face_curvature(f) - patch_mean[patch]), f);
   };
   for (int f = 0; f < mesh.num_faces(); ++f)
-    if (label[f] == kTransition && joinable(f) != kNone) queue.emplace(priority(f), f);
+    if (label[f] == kTransition) push(f);
   while (!queue.empty()) {
     const int f = queue.top().second;
     queue.pop();
@@ -167,11 +195,10 @@ void thin_transitions(const TriangleMesh& mesh, const MeshTopology& topology,
       const int v = mesh.F(f, c);
       touch(v, patch);
       for (const int* g = topology.vertex_faces_begin(v); g != topology.vertex_faces_end(v); ++g)
-        if (label[*g] == kTransition && joinable(*g) != kNone) queue.emplace(priority(*g), *g);
+        if (label[*g] == kTransition) push(*g);
     }
   }
 }
-
 
 // Mean incident edge length of every vertex: the local sampling resolution.
 Eigen::VectorXd local_edge_length(const TriangleMesh& mesh, const MeshTopology& topology) {
@@ -241,9 +268,11 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
     TriangleMesh denoised;
     denoised.V = denoised_positions(mesh, topology, options.denoising);
     denoised.F = mesh.F;
-    out.curvature = vertex_curvature(denoised, topology);
+    VertexCurvature curvature = vertex_curvature(denoised, topology);
+    out.mean_curvature = std::move(curvature.mean);
+    out.vertex_area = std::move(curvature.area);
   }
-  const Eigen::VectorXd& H = out.curvature.mean;
+  const Eigen::VectorXd& H = out.mean_curvature;
   timer.stage("curvature");
 
   // Pass 1 cuts out the sharpest features. The thesis takes the extremity peaks of the histogram;
@@ -265,7 +294,7 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
   // the flanks of chamfered edges) are smoothed, the histogram is rebuilt, and every remaining
   // valley splits it.
   const std::vector<char> smooth_region = region_interior(mesh.F, non_sharp);
-  out.smoothed_mean = smooth_values(H, out.curvature.area, smooth_region, topology,
+  out.smoothed_mean = smooth_values(H, out.vertex_area, smooth_region, topology,
                                     options.curvature_smoothing_iterations);
   std::vector<double> hs(out.smoothed_mean.data(), out.smoothed_mean.data() + nv);
   out.histogram = histogram_ranges(hs, smooth_region, options.histogram);
@@ -276,7 +305,10 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
   timer.stage("pass2");
 
   dissolve_slivers(mesh, topology, out.working_labels, num_classified);
-  thin_transitions(mesh, topology, H, out.working_labels);
+  grow_patches(mesh, topology, out.smoothed_mean, num_classified, false, out.working_labels);
+  std::vector<char> working_transition(mesh.num_faces());
+  for (int f = 0; f < mesh.num_faces(); ++f) working_transition[f] = out.working_labels[f] == kTransition;
+  grow_patches(mesh, topology, out.smoothed_mean, num_classified, true, out.working_labels);
   timer.stage("thinning");
 
   // Map back: each input face takes the patch covering most of its area; duplicates repeat the
@@ -301,9 +333,19 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
         out.labels[f] = patch;
       }
   }
+  std::vector<double> transition_area(nf_input, 0.0), total_area(nf_input, 0.0);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    total_area[out.working.face_origin[f]] += area[f];
+    if (working_transition[f]) transition_area[out.working.face_origin[f]] += area[f];
+  }
+  out.transition.assign(nf_input, 0);
+  for (int f = 0; f < nf_input; ++f) out.transition[f] = transition_area[f] > 0.5 * total_area[f];
   for (int f = 0; f < nf_input; ++f) {
     const int working = prepared.input_face[f];
-    if (working >= 0 && prepared.face_origin[working] != f) out.labels[f] = out.labels[prepared.face_origin[working]];
+    if (working >= 0 && prepared.face_origin[working] != f) {
+      out.labels[f] = out.labels[prepared.face_origin[working]];
+      out.transition[f] = out.transition[prepared.face_origin[working]];
+    }
   }
   const int num_patches = compact_patches(out.labels, out.working_labels, num_classified);
 

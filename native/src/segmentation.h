@@ -5,7 +5,8 @@
 // (thesis ch. 3). Pass 1 cuts out the sharpest features with the two extremity peaks of the mean
 // curvature histogram; pass 2 smooths the curvature of the remaining region, rebuilds the histogram
 // and splits at every remaining valley. Triangles whose three vertices share a range form patches;
-// the others are transitions, thinned to one-triangle-wide strips.
+// the others are transitions, thinned to one-triangle-wide strips, which are finally folded into
+// the adjacent patches so that every triangle belongs to a feature.
 #pragma once
 
 #include "curvature.h"
@@ -47,13 +48,15 @@ struct PatchSummary {
 };
 
 struct Segmentation {
-  std::vector<int> labels;             // per input face: patch id, -1 for transition/degenerate
+  std::vector<int> labels;             // per input face: patch id; -1 where degenerate or unreachable
+  std::vector<char> transition;        // per input face: lay on a transition strip before folding
   std::vector<PatchSummary> patches;   // indexed by patch id
 
   // The working mesh the analysis ran on, with its results, for the later stages.
   RefinedMesh working;                 // prepared + refined mesh; face_origin maps to input faces
   std::vector<int> working_labels;     // per working face
-  VertexCurvature curvature;           // of the working mesh
+  Eigen::VectorXd mean_curvature;      // "v:mean_curvature" of the denoised working mesh
+  Eigen::VectorXd vertex_area;         // "v:mixed_area" of the denoised working mesh
   Eigen::VectorXd smoothed_mean;       // pass-2 curvature values (raw H outside the smooth region)
   HistogramRanges histogram;           // pass-2 histogram and its ranges
 

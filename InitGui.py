@@ -1,0 +1,30 @@
+# Idealize workbench: GUI registration, run by FreeCAD at GUI start-up.
+#
+# FreeCAD runs this file with exec(), so functions and methods defined here do not see the
+# file's other top-level names: every method imports what it uses.
+import importlib.util
+import os
+
+import FreeCADGui
+
+
+class IdealizeWorkbench(FreeCADGui.Workbench):
+    MenuText = "Idealize"
+    ToolTip = "Turn triangle meshes of mechanical parts into features and CAD"
+
+    def Initialize(self):
+        # Imported on first activation only: keeps FreeCAD start-up free of the native core.
+        import idealize.gui.commands  # noqa: F401  (registers the commands)
+        commands = ["Idealize_Segment"]
+        self.appendToolbar("Idealize", commands)
+        self.appendMenu("&Idealize", commands)
+
+    def GetClassName(self):
+        return "Gui::PythonWorkbench"
+
+
+# Init.py put the checkout on sys.path; find_spec locates the package without importing it.
+IdealizeWorkbench.Icon = os.path.join(
+    os.path.dirname(os.path.dirname(importlib.util.find_spec("idealize").origin)),
+    "Resources", "icons", "Idealize.svg")
+FreeCADGui.addWorkbench(IdealizeWorkbench())

@@ -1,0 +1,112 @@
+"""Analytic test meshes made with numpy, and CAD parts made with FreeCAD (when available)."""
+import sys
+
+import numpy as np
+
+
+def icosphere(radius=1.0, subdivisions=4):
+    """A sphere of nearly equilateral triangles, outward oriented."""
+    t = (1.0 + 5 ** 0.5) / 2.0
+    V = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+                  [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
+    F = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+                  [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+                  [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]])
+    V = V / np.linalg.norm(V, axis=1)[:, None]
+    for _ in range(subdivisions):
+        midpoint = {}
+        points = list(V)
+
+        def middle(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in midpoint:
+                p = points[a] + points[b]
+                points.append(p / np.linalg.norm(p))
+                midpoint[key] = len(points) - 1
+            return midpoint[key]
+
+        faces = []
+        for a, b, c in F:
+            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
+            faces += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+        V, F = np.array(points), np.array(faces)
+    return V * radius, F.astype(np.int32)
+
+
+def tube(radius=1.0, length=4.0, segments=64, rings=40):
+    """An open cylinder around z with staggered rings (nearly equilateral triangles), outward."""
+    V = []
+    for i in range(rings + 1):
+        offset = 0.5 * (i % 2)
+        for j in range(segments):
+            a = 2 * np.pi * (j + offset) / segments
+            V.append([radius * np.cos(a), radius * np.sin(a), length * i / rings])
+    F = []
+    for i in range(rings):
+        for j in range(segments):
+            a, b = i * segments + j, i * segments + (j + 1) % segments
+            c, d = (i + 1) * segments + j, (i + 1) * segments + (j + 1) % segments
+            if i % 2 == 0:
+                F += [[a, b, c], [b, d, c]]
+            else:
+                F += [[a, b, d], [a, d, c]]
+    return np.array(V, float), np.array(F, np.int32)
+
+
+def grid(n=20, seed=0):
+    """A flat square of 2 n² triangles with jittered interior vertices."""
+    rng = np.random.default_rng(seed)
+    xs, ys = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1))
+    V = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)])
+    interior = (xs.ravel() > 0) & (xs.ravel() < 1) & (ys.ravel() > 0) & (ys.ravel() < 1)
+    V[interior, :2] += rng.uniform(-0.3, 0.3, (interior.sum(), 2)) / n
+    F = []
+    for i in range(n):
+        for j in range(n):
+            a = i * (n + 1) + j
+            F += [[a, a + 1, a + n + 2], [a, a + n + 2, a + n + 1]]
+    return V, np.array(F, np.int32)
+
+
+def freecad():
+    """FreeCAD's Part and MeshPart modules, or None when FreeCAD is not installed."""
+    sys.path.append("/usr/lib/freecad-python3/lib")
+    try:
+        import FreeCAD  # noqa: F401  (must come before Part)
+        import MeshPart
+        import Part
+    except ImportError:
+        return None
+    return FreeCAD, Part, MeshPart
+
+
+def bracket_solid():
+    """A 60 x 40 x 20 block with a through hole (r 8) and four vertical fillets (r 5): 11 faces."""
+    FreeCAD, Part, _ = freecad()
+    block = Part.makeBox(60, 40, 20).cut(Part.makeCylinder(8, 20, FreeCAD.Vector(30, 20, 0)))
+    vertical = [e for e in block.Edges if e.Curve.__class__.__name__ == "Line"
+                and abs(e.Vertexes[0].Point.z - e.Vertexes[-1].Point.z) > 19]
+    return block.makeFillet(5, vertical)
+
+
+def tessellate_with_faces(solid, tolerance):
+    """CAD-like tessellation with the B-rep face index of every triangle (shared edges welded).
+
+    The whole solid is tessellated first, so that every face reuses the same edge discretization.
+    """
+    solid.tessellate(tolerance)
+    V, F, gt = [], [], []
+    for index, face in enumerate(solid.Faces):
+        points, triangles = face.tessellate(tolerance)
+        base = len(V)
+        V += [[p.x, p.y, p.z] for p in points]
+        F += [[base + a, base + b, base + c] for a, b, c in triangles]
+        gt += [index] * len(triangles)
+    unique, inverse = np.unique(np.round(np.array(V), 9), axis=0, return_inverse=True)
+    F = inverse.reshape(-1)[np.array(F)]
+    return unique, F.astype(np.int32), np.array(gt, np.int32)
+
+
+def triangle_areas(V, F):
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
