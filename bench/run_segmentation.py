@@ -157,11 +157,49 @@ def freecad_worker(path_in: str, path_out: str) -> None:
     np.savez(path_out, labels=labels, result=np.array(json.dumps(r)))
 
 
+FREECAD_CACHE_VERSION = 1
+RERUN_FREECAD = False  # set by --rerun-freecad
+
+
 def run_freecad(V: np.ndarray, F: np.ndarray, diag: float, dev_rel: float, repeats: int,
                 timeout: float = FREECAD_TIMEOUT) -> Dict:
-    """freecad_segment in a child process that is stopped after `timeout` seconds: FreeCAD's
+    """freecad_segment in a child process that is stopped after `timeout` seconds (FreeCAD's
     cylinder region growing refits the cylinder for every facet it tests and can run for many
-    minutes on a noisy mesh with a loose tolerance."""
+    minutes on a noisy mesh with a loose tolerance).
+
+    FreeCAD does not change between runs, so its results (labels, times, time-outs) are cached
+    under bench/cache/ keyed by the mesh bytes and every parameter; --rerun-freecad measures anew."""
+    import hashlib
+
+    key = hashlib.sha1()
+    for part in (np.ascontiguousarray(V, dtype=np.float64).tobytes(), np.ascontiguousarray(F, dtype=np.int32).tobytes(),
+                 json.dumps([FREECAD_CACHE_VERSION, float(diag), float(dev_rel), int(repeats), float(timeout),
+                             list(FREECAD_TYPES), SLOW_RUN, freecad_min_facets(len(F))]).encode()):
+        key.update(part)
+    cache = datasets.CACHE / f"freecad.{key.hexdigest()[:16]}.npz"
+    if cache.exists() and not RERUN_FREECAD:
+        try:
+            with np.load(cache) as z:
+                r = json.loads(str(z["result"]))
+                r["labels"] = z["labels"].astype(np.int64)
+            r["cached"] = True
+            return r
+        except Exception:
+            pass
+    r = _run_freecad_child(V, F, diag, dev_rel, repeats, timeout)
+    if r.get("ok") or r.get("timeout"):
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        meta = {k: v for k, v in r.items() if k != "labels"}
+        meta["measured"] = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
+        tmp = cache.with_name(cache.name + ".tmp.npz")
+        np.savez(tmp, labels=r["labels"], result=np.array(json.dumps(meta)))
+        os.replace(tmp, cache)
+    r["cached"] = False
+    return r
+
+
+def _run_freecad_child(V: np.ndarray, F: np.ndarray, diag: float, dev_rel: float, repeats: int,
+                       timeout: float) -> Dict:
     import tempfile
 
     with tempfile.TemporaryDirectory(prefix="idealize-bench-") as tmp:
@@ -297,7 +335,7 @@ def cull_sign(V: np.ndarray, F: np.ndarray) -> int:
 
 
 def render(path: Path, V: np.ndarray, F: np.ndarray, panels: Sequence, suptitle: Optional[str] = None,
-           panel_px: int = 900) -> None:
+           panel_px: int = 600) -> None:
     """PNG with one view per (labels, title) panel, each about panel_px x panel_px pixels."""
     import matplotlib
 
@@ -319,6 +357,15 @@ def render(path: Path, V: np.ndarray, F: np.ndarray, panels: Sequence, suptitle:
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
+    _shrink_png(path)
+
+
+def _shrink_png(path: Path) -> None:
+    """Re-saves a figure with a 64-colour palette: the committed pictures stay small."""
+    from PIL import Image
+
+    with Image.open(path) as image:
+        image.convert("RGB").quantize(colors=64).save(path, optimize=True)
 
 
 def figure_name(name: str) -> str:
@@ -592,6 +639,11 @@ def markdown(results: Dict) -> str:
         f"{p['freecad_dev'] * 100:g} % of the diagonal and min facets = max(3, triangles/2000), segments "
         "taken first come first served. Times are wall-clock, best of 3 (single runs above 200k triangles or "
         f"{SLOW_RUN:g} s).")
+    runs = [r[k] for r in results.get("parts", []) for k in ("freecad", "freecad_loose") if k in r]
+    if runs:
+        cached = sum(1 for r in runs if r.get("cached"))
+        L[-1] += (f" FreeCAD's results are cached between runs (FreeCAD does not change; `--rerun-freecad` "
+                  f"measures again): {cached} of the {len(runs)} FreeCAD runs here came from the cache.")
     add("")
 
     summary = results.get("summary", {})
@@ -748,6 +800,8 @@ def main(argv=None) -> int:
     parser.add_argument("--skip-parts", action="store_true")
     parser.add_argument("--no-freecad-loose", dest="freecad_loose", action="store_false",
                         help=f"skip the extra FreeCAD run at {FREECAD_DEV_LOOSE * 100:g} %% of the diagonal")
+    parser.add_argument("--rerun-freecad", action="store_true",
+                        help="measure FreeCAD again instead of using its cached results")
     parser.add_argument("--markdown-only", action="store_true",
                         help="rewrite the Markdown from bench/results/segmentation.json without running")
     parser.add_argument("--scaling-worker", type=int, help=argparse.SUPPRESS)
@@ -767,6 +821,8 @@ def main(argv=None) -> int:
         log(f"wrote {BENCHMARKS_MD}")
         return 0
 
+    global RERUN_FREECAD
+    RERUN_FREECAD = args.rerun_freecad
     partial = bool(args.quick or args.only or args.skip_scaling or args.skip_real or args.skip_parts)
     if args.quick:
         args.skip_scaling = True
@@ -820,4 +876,8 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # Run from an imported copy of this module: FreeCAD's start-up scripts write names such as
+    # `datetime`, `os` and `traceback` into the __main__ namespace, which would clobber ours.
+    import run_segmentation
+
+    sys.exit(run_segmentation.main())

@@ -96,12 +96,14 @@ MeshTopology::MeshTopology(const TriangleMesh& mesh) {
   }
 }
 
-int face_components(const MeshTopology& topology, int num_faces, std::vector<int>& component) {
-  component.assign(num_faces, -1);
+int face_components(const MeshTopology& topology, const std::vector<int>& face_class,
+                    std::vector<int>& component) {
+  const int nf = static_cast<int>(face_class.size());
+  component.assign(nf, -1);
   std::vector<int> stack;
   int count = 0;
-  for (int seed = 0; seed < num_faces; ++seed) {
-    if (component[seed] >= 0) continue;
+  for (int seed = 0; seed < nf; ++seed) {
+    if (face_class[seed] < 0 || component[seed] >= 0) continue;
     component[seed] = count;
     stack.push_back(seed);
     while (!stack.empty()) {
@@ -109,7 +111,7 @@ int face_components(const MeshTopology& topology, int num_faces, std::vector<int
       stack.pop_back();
       for (int c = 0; c < 3; ++c) {
         const int g = topology.face_neighbor(f, c);
-        if (g >= 0 && component[g] < 0) {
+        if (g >= 0 && component[g] < 0 && face_class[g] == face_class[f]) {
           component[g] = count;
           stack.push_back(g);
         }

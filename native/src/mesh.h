@@ -78,8 +78,11 @@ class MeshTopology {
   int num_nonmanifold_edges_ = 0;
 };
 
-// Connected components of faces through manifold edges; returns #components, writes one id per face.
-int face_components(const MeshTopology& topology, int num_faces, std::vector<int>& component);
+// Connected components, through manifold edges, of faces of equal class; faces of negative class
+// belong to none (-1). Returns the number of components and writes one id per face. A class
+// vector of zeros gives the shells of the mesh.
+int face_components(const MeshTopology& topology, const std::vector<int>& face_class,
+                    std::vector<int>& component);
 
 // Area of every face ("f:area").
 Eigen::VectorXd face_areas(const TriangleMesh& mesh);

@@ -65,33 +65,6 @@ std::vector<int> face_classes(const MatrixX3i& F, const std::vector<int>& vertex
   return out;
 }
 
-// Connected components of equal-class faces across manifold edges; returns the component count.
-int class_components(const std::vector<int>& face_class, const MeshTopology& topology,
-                     std::vector<int>& label) {
-  const int nf = static_cast<int>(face_class.size());
-  label.assign(nf, kTransition);
-  std::vector<int> stack;
-  int count = 0;
-  for (int seed = 0; seed < nf; ++seed) {
-    if (face_class[seed] == kTransition || label[seed] != kTransition) continue;
-    label[seed] = count;
-    stack.push_back(seed);
-    while (!stack.empty()) {
-      const int f = stack.back();
-      stack.pop_back();
-      for (int c = 0; c < 3; ++c) {
-        const int g = topology.face_neighbor(f, c);
-        if (g >= 0 && label[g] == kTransition && face_class[g] == face_class[f]) {
-          label[g] = count;
-          stack.push_back(g);
-        }
-      }
-    }
-    ++count;
-  }
-  return count;
-}
-
 // A patch none of whose faces has all three vertices inside the patch is at most two faces wide:
 // too thin to be a feature at this sampling (a speck of noise inside a transition zone). Such
 // patches become transitions, so that thinning can grow the real patches through them.
@@ -252,7 +225,7 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
   {
     const MeshTopology topology(prepared.mesh);
     std::vector<int> shell;
-    out.shells = face_components(topology, prepared.mesh.num_faces(), shell);
+    out.shells = face_components(topology, std::vector<int>(prepared.mesh.num_faces(), 0), shell);
     out.boundary_edges = topology.num_boundary_edges();
     out.nonmanifold_edges = topology.num_nonmanifold_edges();
     timer.stage("prepare");
@@ -301,7 +274,7 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
   for (int v = 0; v < nv; ++v)
     if (non_sharp[v]) vertex_class[v] = kSmoothBase + out.histogram.range_of(hs[v]);
   const std::vector<int> face_class = face_classes(mesh.F, vertex_class);
-  const int num_classified = class_components(face_class, topology, out.working_labels);
+  const int num_classified = face_components(topology, face_class, out.working_labels);
   timer.stage("pass2");
 
   dissolve_slivers(mesh, topology, out.working_labels, num_classified);
