@@ -603,9 +603,7 @@ def summarize_parts(rows: List[Dict]) -> Dict:
             entry["time_ratio_median"] = float(np.median(ratios)) if ratios else None
         by_type: Dict[str, Dict[str, List[int]]] = {}
         for r in vr:
-            for method in ("idealize", "freecad"):
-                if not r[method].get("ok"):
-                    continue
+            for method in ("idealize", "freecad"):  # failed runs count too: all their faces missed
                 for f in r[method]["score"]["per_face"]:
                     t = r["face_types"][f["face"]]
                     cell = by_type.setdefault(t, {}).setdefault(method, [0, 0])
@@ -656,7 +654,7 @@ def markdown(results: Dict) -> str:
         for variant, e in summary.items():
             i, f = e.get("idealize", {}), e.get("freecad", {})
             ratio = e.get("time_ratio_total")
-            ratio_text = f"{ratio:.2f} (median {e.get('time_ratio_median') or 0:.2f})" if ratio else "n/a"
+            ratio_text = f"{ratio:.3g} (median {e.get('time_ratio_median') or 0:.3g})" if ratio else "n/a"
             add(f"| {variant} | {e['meshes']} | {i.get('faces', 0)} | **{i.get('correct', 0)} "
                 f"({_pct(i.get('correct', 0), i.get('faces', 0))})** | {i.get('over', 0)} | {i.get('under', 0)} | "
                 f"{i.get('patches', 0)} | {i.get('seconds', 0):.2f} s | {f.get('correct', 0)} "
@@ -716,7 +714,7 @@ def markdown(results: Dict) -> str:
                 else:
                     cells += ["failed: " + run.get("error", "")[:60].replace("|", "/"), "", "", "", ""]
             if r["idealize"].get("ok") and r["freecad"].get("ok") and r["idealize"]["seconds"] > 0:
-                cells.append(f"{r['freecad']['seconds'] / r['idealize']['seconds']:.2f}")
+                cells.append(f"{r['freecad']['seconds'] / r['idealize']['seconds']:.3g}")
             else:
                 cells.append("")
             add("| " + " | ".join(cells) + " |")
@@ -817,6 +815,8 @@ def main(argv=None) -> int:
 
     if args.markdown_only:
         results = json.loads((RESULTS / "segmentation.json").read_text())
+        if results.get("parts"):
+            results["summary"] = summarize_parts(results["parts"])
         write_benchmarks_md(markdown(results))
         log(f"wrote {BENCHMARKS_MD}")
         return 0
