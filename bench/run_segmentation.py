@@ -353,7 +353,7 @@ def render(path: Path, V: np.ndarray, F: np.ndarray, panels: Sequence, suptitle:
         _draw(ax, V, F, np.asarray(labels), title, cull, view)
     if suptitle:
         fig.suptitle(suptitle, fontsize=12)
-    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.0, top=0.92 if suptitle else 0.97, wspace=0.0)
+    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.0, top=0.87 if suptitle else 0.95, wspace=0.0)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
