@@ -89,7 +89,6 @@ py::dict segmentation_dict(Segmentation&& s) {
 PYBIND11_MODULE(_native, m) {
   m.doc() = "Idealize native core: mesh reading, curvature, feature segmentation.";
   py::register_exception<MeshError>(m, "MeshError", PyExc_ValueError);
-  py::register_exception<Cancelled>(m, "Cancelled", PyExc_KeyboardInterrupt);
 
   m.def(
       "read_mesh",

@@ -24,12 +24,6 @@ class MeshError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Raised when a caller asked a long computation to stop (see CancelFlag).
-class Cancelled : public std::runtime_error {
- public:
-  Cancelled() : std::runtime_error("operation cancelled") {}
-};
-
 struct TriangleMesh {
   MatrixX3d V;  // #V x 3 vertex positions
   MatrixX3i F;  // #F x 3 vertex indices, counter-clockwise seen from outside
