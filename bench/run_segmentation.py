@@ -767,13 +767,15 @@ def markdown(results: Dict) -> str:
     return "\n".join(L)
 
 
-def write_benchmarks_md(section: str, path: Path = BENCHMARKS_MD) -> None:
-    block = f"{SECTION_BEGIN}\n{section}\n{SECTION_END}\n"
+def write_benchmarks_md(section: str, path: Path = BENCHMARKS_MD, begin: str = SECTION_BEGIN,
+                        end: str = SECTION_END) -> None:
+    """Replaces the block between the markers `begin` and `end` (appends it when missing)."""
+    block = f"{begin}\n{section}\n{end}\n"
     if path.exists():
         text = path.read_text()
-        if SECTION_BEGIN in text and SECTION_END in text:
-            head, rest = text.split(SECTION_BEGIN, 1)
-            tail = rest.split(SECTION_END, 1)[1].lstrip("\n")
+        if begin in text and end in text:
+            head, rest = text.split(begin, 1)
+            tail = rest.split(end, 1)[1].lstrip("\n")
             text = head + block + ("\n" + tail if tail else "")
         else:
             text = text.rstrip("\n") + "\n\n" + block

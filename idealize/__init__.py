@@ -7,10 +7,15 @@ Console use (plain Python or FreeCAD)::
     seg = idealize.segment(mesh)
     seg.labels        # one patch id per input triangle, -1 on transitions
     seg.features      # one summary dict per patch
+    layer = idealize.idealize(mesh)
+    layer.features    # type, params, rms per feature
+    layer.relations   # parallel, coaxial, tangent, ...
 """
 from .curvature import vertex_curvature
+from .features import FeatureLayer, idealize
 from .mesh import Mesh, MeshError, load_mesh
 from .segmentation import Segmentation, segment
 
-__all__ = ["Mesh", "MeshError", "load_mesh", "Segmentation", "segment", "vertex_curvature"]
+__all__ = ["FeatureLayer", "Mesh", "MeshError", "idealize", "load_mesh", "Segmentation", "segment",
+           "vertex_curvature"]
 __version__ = "0.1.0"

@@ -6,7 +6,9 @@ import numpy as np
 from . import __version__
 
 
-def build_report(mesh, segmentation, timings, step):
+def build_report(mesh, layer, timings, step):
+    """The report of one conversion; `layer` is the :class:`idealize.FeatureLayer`."""
+    segmentation = layer.segmentation
     return {
         "idealize_version": __version__,
         "input": {
@@ -19,28 +21,39 @@ def build_report(mesh, segmentation, timings, step):
             "degenerate_triangles_ignored": int(segmentation.removed_degenerate),
             "duplicate_triangles_merged": int(segmentation.removed_duplicate),
         },
-        "labels": segmentation.labels,
+        "labels": layer.labels,
         "transition_triangles": np.flatnonzero(segmentation.transition),
-        "features": [_feature(f) for f in segmentation.features],
+        "features": [_feature(f) for f in layer.features],
+        "adjacency": [{"a": int(e["a"]), "b": int(e["b"]), "continuity": e["continuity"],
+                       "angle": float(e["angle"]), "length": float(e["length"])} for e in layer.adjacency],
+        "relations": [{"kind": r["kind"], "features": [int(i) for i in r["features"]]} for r in layer.relations],
+        "deviation": {"max": float(layer.deviation["max"]), "rms": float(layer.deviation["rms"])},
+        "tolerances": {"distance": float(layer.distance_tolerance)},
         "timings": {name: round(float(seconds), 6) for name, seconds in timings.items()},
         "step": step,
     }
 
 
-def _feature(patch):
-    low, high = patch["curvature_range"]
+def _feature(feature):
     return {
-        "id": int(patch["id"]),
-        "triangles": int(patch["triangles"]),
-        "area": float(patch["area"]),
-        "kind": patch["kind"],
-        "mean_curvature": float(patch["mean_curvature"]),
-        "curvature_range": [_finite_or_none(low), _finite_or_none(high)],
+        "id": int(feature["id"]),
+        "type": feature["type"],
+        "params": {key: _plain(value) for key, value in feature["params"].items()},
+        "rms": float(feature["rms"]),
+        "max_error": float(feature["max_error"]),
+        "normal_rms": float(feature["normal_rms"]),
+        "triangles": int(feature["triangles"]),
+        "area": float(feature["area"]),
+        "curvature_type": feature["curvature_type"],
+        "curvature": {key: float(value) for key, value in feature["curvature"].items()},
     }
 
 
-def _finite_or_none(value):
-    return float(value) if np.isfinite(value) else None
+def _plain(value):
+    """Floats and lists of floats for JSON (axes, points) from numpy or tuples."""
+    if isinstance(value, (tuple, list, np.ndarray)):
+        return [float(v) for v in value]
+    return float(value)
 
 
 def write_report(report, path):

@@ -26,6 +26,7 @@ class Segmentation:
         self.removed_degenerate = result.pop("removed_degenerate")
         self.removed_duplicate = result.pop("removed_duplicate")
         self.histogram = result.pop("histogram")
+        self.zero_mean_curvature = tuple(result.pop("zero_mean_curvature"))
         self.mesh_check = {key: result.pop(key) for key in ("shells", "boundary_edges", "nonmanifold_edges")}
         self.working = result
 

@@ -35,7 +35,8 @@ def test_convert_writes_report_with_public_keys(tmp_path, sphere_stl):
     assert report["input"]["triangles"] == triangles
     assert report["input"]["vertices"] == 642  # welded
     assert len(report["labels"]) == triangles and all(isinstance(x, int) for x in report["labels"])
-    assert report["features"] and {"id", "triangles"} <= set(report["features"][0])
+    assert report["features"] and {"id", "triangles", "type", "params", "rms"} <= set(report["features"][0])
+    assert {"adjacency", "relations", "deviation"} <= set(report)
     assert sum(f["triangles"] for f in report["features"]) == sum(1 for x in report["labels"] if x >= 0)
     assert all(0 <= t < triangles for t in report["transition_triangles"])
     assert report["timings"]["total"] > 0 and "segment" in report["timings"]
@@ -50,8 +51,48 @@ def test_labels_follow_input_file_order(tmp_path, sphere_stl):
     report_path = tmp_path / "report.json"
     assert run_cli("convert", str(path), "-o", str(tmp_path / "o.step"), "--report", str(report_path)).returncode == 0
     import idealize
-    expected = idealize.segment(idealize.load_mesh(path)).labels
+    expected = idealize.idealize(idealize.load_mesh(path)).labels
     assert json.loads(report_path.read_text())["labels"] == expected.tolist()
+
+
+def test_sphere_report_has_type_and_parameters(tmp_path, sphere_stl):
+    path, _ = sphere_stl
+    report_path = tmp_path / "report.json"
+    assert run_cli("convert", str(path), "-o", str(tmp_path / "o.step"), "--report", str(report_path)).returncode == 0
+    report = json.loads(report_path.read_text())
+    (sphere,) = report["features"]
+    assert sphere["type"] == "sphere"
+    # The icosphere's vertices lie on r = 10; its flat facets pull a least-squares fit slightly in.
+    assert abs(sphere["params"]["radius"] - 10.0) < 0.05
+    assert np.linalg.norm(sphere["params"]["center"]) < 1e-6
+    assert sphere["rms"] < 0.05 and report["deviation"]["max"] < 0.05
+
+
+@pytest.mark.skipif(shapes.freecad() is None, reason="FreeCAD is not installed")
+def test_bracket_report_features_graph_and_relations(tmp_path):
+    V, F, _ = shapes.tessellate_with_faces(shapes.bracket_solid(), 0.05)
+    path = tmp_path / "bracket.stl"
+    write_binary_stl(path, V, F)
+    report_path = tmp_path / "report.json"
+    assert run_cli("convert", str(path), "-o", str(tmp_path / "o.step"), "--report", str(report_path)).returncode == 0
+    report = json.loads(report_path.read_text())
+    features = report["features"]
+    assert sorted(f["type"] for f in features) == ["cylinder"] * 5 + ["plane"] * 6
+    param_keys = {"plane": {"normal", "point"}, "cylinder": {"axis", "point", "radius"}}
+    assert all(set(f["params"]) == param_keys[f["type"]] and "rms" in f for f in features)
+    radii = sorted(round(f["params"]["radius"], 2) for f in features if f["type"] == "cylinder")
+    assert radii == [5.0, 5.0, 5.0, 5.0, 8.0]  # float STL: within 0.005
+    fillets = sorted(f["id"] for f in features if f["type"] == "cylinder" and f["params"]["radius"] < 6)
+    assert {"kind": "equal_radius", "features": fillets} in report["relations"]
+    # Fillets meet the side planes tangentially, the top and bottom sharply (the count of tangent
+    # pairs is checked in test_features on the double-precision mesh).
+    kind = {f["id"]: f["type"] for f in features}
+    for edge in report["adjacency"]:
+        pair = {kind[edge["a"]], kind[edge["b"]]}
+        if edge["continuity"] == "G1":
+            assert pair == {"plane", "cylinder"}
+    assert sum(e["continuity"] == "G1" for e in report["adjacency"]) >= 4
+    assert report["deviation"]["max"] < 1e-3 and report["deviation"]["rms"] <= report["deviation"]["max"]
 
 
 def test_bad_input_exits_with_message(tmp_path):

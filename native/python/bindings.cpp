@@ -1,6 +1,7 @@
 // The only place where C++ meets Python. Arrays cross as numpy: V float64 (#V, 3), F int32 (#F, 3),
 // row-major. Long computations release the GIL; C++ exceptions become Python exceptions.
 #include "curvature.h"
+#include "feature_layer.h"
 #include "mesh.h"
 #include "mesh_io.h"
 #include "remesh_cgal.h"
@@ -61,6 +62,7 @@ py::dict segmentation_dict(Segmentation&& s) {
     patch["triangles"] = p.input_triangles;
     patch["area"] = p.area;
     patch["mean_curvature"] = p.mean_curvature;
+    patch["mean_gaussian"] = p.mean_gaussian;
     patch["curvature_range"] = py::make_tuple(p.range_low, p.range_high);
     patches.append(patch);
   }
@@ -78,9 +80,79 @@ py::dict segmentation_dict(Segmentation&& s) {
   d["mean_curvature"] = std::move(s.mean_curvature);
   d["smoothed_mean_curvature"] = std::move(s.smoothed_mean);
   d["histogram"] = histogram_dict(s.histogram);
+  d["zero_mean_curvature"] = py::make_tuple(s.zero_low, s.zero_high);
   d["shells"] = s.shells;
   d["boundary_edges"] = s.boundary_edges;
   d["nonmanifold_edges"] = s.nonmanifold_edges;
+  return d;
+}
+
+py::dict surface_params(const Surface& s) {
+  using V3 = Eigen::Vector3d;
+  auto list = [](const V3& v) { return py::make_tuple(v.x(), v.y(), v.z()); };
+  py::dict d;
+  switch (s.type) {
+    case SurfaceType::Plane: d["normal"] = list(s.axis); d["point"] = list(s.point); break;
+    case SurfaceType::Cylinder: d["axis"] = list(s.axis); d["point"] = list(s.point); d["radius"] = s.radius; break;
+    case SurfaceType::Cone: d["axis"] = list(s.axis); d["apex"] = list(s.point); d["half_angle"] = s.half_angle; break;
+    case SurfaceType::Sphere: d["center"] = list(s.point); d["radius"] = s.radius; break;
+    case SurfaceType::Torus:
+      d["axis"] = list(s.axis); d["center"] = list(s.point); d["major"] = s.radius; d["minor"] = s.minor;
+      break;
+    case SurfaceType::Freeform: break;
+  }
+  return d;
+}
+
+py::dict feature_layer_dict(FeatureLayer&& layer) {
+  py::list features;
+  for (const Feature& f : layer.features) {
+    py::dict d;
+    d["id"] = f.id;
+    d["type"] = surface_type_name(f.type);
+    d["curvature_type"] = surface_type_name(f.curvature_type);
+    d["curvature"] = py::dict(py::arg("mean") = f.curvature.mean, py::arg("gaussian") = f.curvature.gaussian);
+    d["params"] = surface_params(f.type == SurfaceType::Freeform ? Surface{} : f.surface);
+    d["best_fit"] = py::make_tuple(surface_type_name(f.surface.type), surface_params(f.surface));
+    d["rms"] = f.rms;
+    d["max_error"] = f.max_error;
+    d["normal_rms"] = f.normal_rms;
+    d["spread"] = f.spread;
+    d["normal_spread"] = f.normal_spread;
+    d["area"] = f.area;
+    d["triangles"] = f.triangles;
+    d["fit_vertices"] = f.vertices;
+    features.append(d);
+  }
+  py::list adjacency;
+  for (const FeatureAdjacency& a : layer.adjacency) {
+    py::dict d;
+    d["a"] = a.a;
+    d["b"] = a.b;
+    d["continuity"] = a.continuity == Continuity::G1 ? "G1" : "G0";
+    d["angle"] = a.angle;
+    d["length"] = a.length;
+    adjacency.append(d);
+  }
+  py::list relations;
+  for (const FeatureRelation& r : layer.relations) {
+    py::dict d;
+    d["kind"] = r.kind;
+    d["features"] = r.features;
+    relations.append(d);
+  }
+  py::list timings;
+  for (const auto& [stage, seconds] : layer.timings) timings.append(py::make_tuple(stage, seconds));
+  py::dict d;
+  d["labels"] = to_array(layer.labels);
+  d["features"] = features;
+  d["adjacency"] = adjacency;
+  d["relations"] = relations;
+  d["idealized_vertices"] = std::move(layer.idealized_vertices);
+  d["max_deviation"] = layer.max_deviation;
+  d["rms_deviation"] = layer.rms_deviation;
+  d["distance_tolerance"] = layer.distance_tolerance;
+  d["timings"] = timings;
   return d;
 }
 
@@ -119,6 +191,50 @@ PYBIND11_MODULE(_native, m) {
         return segmentation_dict(std::move(s));
       },
       py::arg("V"), py::arg("F"), "Two-pass mean-curvature-histogram segmentation.");
+
+  m.def(
+      "identify_features",
+      [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, std::vector<int> labels,
+         const std::vector<double>& patch_mean, const std::vector<double>& patch_gaussian, double zero_low,
+         double zero_high) {
+        const TriangleMesh mesh = make_mesh(V, F);
+        if (patch_mean.size() != patch_gaussian.size())
+          throw MeshError("one mean and one Gaussian curvature per patch are needed");
+        std::vector<PatchCurvature> curvature(patch_mean.size());
+        for (size_t p = 0; p < curvature.size(); ++p) curvature[p] = {patch_mean[p], patch_gaussian[p]};
+        FeatureLayer layer;
+        {
+          py::gil_scoped_release release;
+          layer = identify_features(mesh, labels, curvature, EffectiveZero{zero_low, zero_high});
+        }
+        return feature_layer_dict(std::move(layer));
+      },
+      py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("patch_mean"), py::arg("patch_gaussian"),
+      py::arg("zero_low"), py::arg("zero_high"), "Feature identification, graph and projection (thesis ch. 4).");
+
+  m.def(
+      "fit_surface",
+      [](const std::string& type, const Eigen::Ref<const MatrixX3d>& points, const Eigen::Ref<const MatrixX3d>& normals,
+         const Eigen::VectorXd& weights) {
+        SurfaceType t = SurfaceType::Freeform;
+        for (SurfaceType candidate : {SurfaceType::Plane, SurfaceType::Cylinder, SurfaceType::Cone,
+                                      SurfaceType::Sphere, SurfaceType::Torus})
+          if (type == surface_type_name(candidate)) t = candidate;
+        if (t == SurfaceType::Freeform) throw std::invalid_argument("unknown surface type '" + type + "'");
+        if (points.rows() != normals.rows() || points.rows() != weights.size())
+          throw std::invalid_argument("points, normals and weights must have one row per point");
+        const FitData data{points, weights, points, normals, weights};
+        const SurfaceFit fit = fit_surface(t, data);
+        py::dict d;
+        d["valid"] = fit.valid;
+        d["params"] = surface_params(fit.surface);
+        d["rms"] = fit.rms;
+        d["max_error"] = fit.max_error;
+        d["normal_rms"] = fit.normal_rms;
+        return d;
+      },
+      py::arg("type"), py::arg("points"), py::arg("normals"), py::arg("weights"),
+      "Fit one surface type to points with normals and weights (the points double as the oriented samples).");
 
   m.def(
       "vertex_curvature",

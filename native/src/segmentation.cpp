@@ -243,6 +243,7 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
     denoised.F = mesh.F;
     VertexCurvature curvature = vertex_curvature(denoised, topology);
     out.mean_curvature = std::move(curvature.mean);
+    out.gaussian_curvature = std::move(curvature.gaussian);
     out.vertex_area = std::move(curvature.area);
   }
   const Eigen::VectorXd& H = out.mean_curvature;
@@ -273,6 +274,18 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
   out.histogram = histogram_ranges(hs, smooth_region, options.histogram);
   for (int v = 0; v < nv; ++v)
     if (non_sharp[v]) vertex_class[v] = kSmoothBase + out.histogram.range_of(hs[v]);
+  {
+    // Where the histogram has no valley on one side of zero, the range is mirrored; with none on
+    // either side, one bin is the finest zero the histogram resolves.
+    const int zero = out.histogram.range_of(0.0);
+    double low = out.histogram.range_lower(zero), high = out.histogram.range_upper(zero);
+    const double bin = out.histogram.histogram.bin_width();
+    if (!std::isfinite(low) && !std::isfinite(high)) low = -bin, high = bin;
+    else if (!std::isfinite(low)) low = -high;
+    else if (!std::isfinite(high)) high = -low;
+    out.zero_low = std::min(low, 0.0);
+    out.zero_high = std::max(high, 0.0);
+  }
   const std::vector<int> face_class = face_classes(mesh.F, vertex_class);
   const int num_classified = face_components(topology, face_class, out.working_labels);
   timer.stage("pass2");
@@ -341,7 +354,10 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
       s.range_high = out.histogram.range_upper(cls - kSmoothBase);
     }
     const double face_h = (H[mesh.F(f, 0)] + H[mesh.F(f, 1)] + H[mesh.F(f, 2)]) / 3.0;
+    const Eigen::VectorXd& K = out.gaussian_curvature;
+    const double face_k = (K[mesh.F(f, 0)] + K[mesh.F(f, 1)] + K[mesh.F(f, 2)]) / 3.0;
     s.mean_curvature += area[f] * face_h;
+    s.mean_gaussian += area[f] * face_k;
     curvature_area[p] += area[f];
   }
   const Eigen::VectorXd input_area = face_areas(input);
@@ -351,7 +367,10 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
       out.patches[out.labels[f]].area += input_area[f];
     }
   for (int p = 0; p < num_patches; ++p)
-    if (curvature_area[p] > 0.0) out.patches[p].mean_curvature /= curvature_area[p];
+    if (curvature_area[p] > 0.0) {
+      out.patches[p].mean_curvature /= curvature_area[p];
+      out.patches[p].mean_gaussian /= curvature_area[p];
+    }
   timer.stage("map_back");
   return out;
 }

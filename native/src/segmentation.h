@@ -50,6 +50,7 @@ struct PatchSummary {
   int input_triangles = 0;       // input faces labelled with this patch
   double area = 0.0;             // their total area
   double mean_curvature = 0.0;   // area-weighted mean of H over the patch
+  double mean_gaussian = 0.0;    // area-weighted mean of K over the patch
   double range_low = 0.0, range_high = 0.0;  // histogram range of the patch's vertices
 };
 
@@ -62,9 +63,11 @@ struct Segmentation {
   RefinedMesh working;                 // prepared + refined mesh; face_origin maps to input faces
   std::vector<int> working_labels;     // per working face
   Eigen::VectorXd mean_curvature;      // "v:mean_curvature" of the denoised working mesh
+  Eigen::VectorXd gaussian_curvature;  // "v:gaussian_curvature" of the denoised working mesh
   Eigen::VectorXd vertex_area;         // "v:mixed_area" of the denoised working mesh
   Eigen::VectorXd smoothed_mean;       // pass-2 curvature values (raw H outside the smooth region)
   HistogramRanges histogram;           // pass-2 histogram and its ranges
+  double zero_low = 0.0, zero_high = 0.0;  // effective zero of H: the histogram range holding 0
 
   int removed_degenerate = 0, removed_duplicate = 0;
   int shells = 0, boundary_edges = 0, nonmanifold_edges = 0;  // of the prepared input

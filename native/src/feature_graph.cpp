@@ -1,0 +1,141 @@
+#include "feature_graph.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace idealize {
+
+namespace {
+
+bool analytic(const Feature& f) { return f.type != SurfaceType::Freeform; }
+
+Eigen::Vector3d face_normal(const TriangleMesh& mesh, int f) {
+  const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+  return (b - a).cross(c - a).normalized();
+}
+
+// The normal of a feature's surface at p, turned to the side the mesh face there faces.
+Eigen::Vector3d oriented_normal(const Feature& feature, const Eigen::Vector3d& p, const Eigen::Vector3d& face) {
+  if (!analytic(feature)) return face;
+  const Eigen::Vector3d n = surface_normal(feature.surface, p);
+  return n.dot(face) < 0.0 ? Eigen::Vector3d(-n) : n;
+}
+
+double weighted_median(std::vector<std::pair<double, double>> values) {  // (value, weight)
+  std::sort(values.begin(), values.end());
+  double total = 0.0;
+  for (const auto& v : values) total += v.second;
+  double running = 0.0;
+  for (const auto& v : values) {
+    running += v.second;
+    if (running >= 0.5 * total) return v.first;
+  }
+  return values.empty() ? 0.0 : values.back().first;
+}
+
+void find_adjacency(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
+                    const std::vector<Feature>& features, double angle_tolerance,
+                    std::vector<FeatureAdjacency>& adjacency) {
+  std::map<std::pair<int, int>, std::vector<std::pair<double, double>>> boundaries;  // (angle, length)
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(f, c);
+      if (g < f || labels[f] < 0 || labels[g] < 0 || labels[f] == labels[g]) continue;
+      const Eigen::Vector3d p = mesh.V.row(mesh.F(f, (c + 1) % 3)), q = mesh.V.row(mesh.F(f, (c + 2) % 3));
+      const Eigen::Vector3d middle = 0.5 * (p + q);
+      const Eigen::Vector3d nf = oriented_normal(features[labels[f]], middle, face_normal(mesh, f));
+      const Eigen::Vector3d ng = oriented_normal(features[labels[g]], middle, face_normal(mesh, g));
+      const double angle = std::acos(std::clamp(nf.dot(ng), -1.0, 1.0));
+      boundaries[{std::min(labels[f], labels[g]), std::max(labels[f], labels[g])}].emplace_back(angle, (q - p).norm());
+    }
+  adjacency.clear();
+  for (const auto& [pair, samples] : boundaries) {
+    FeatureAdjacency a;
+    a.a = pair.first;
+    a.b = pair.second;
+    for (const auto& s : samples) a.length += s.second;
+    a.angle = weighted_median(samples);
+    a.continuity = a.angle < angle_tolerance ? Continuity::G1 : Continuity::G0;
+    adjacency.push_back(a);
+  }
+}
+
+// Greedy clustering, largest feature first: each member joins the first group whose founder it
+// matches, so the result does not depend on the order of the patches.
+template <class Matches>
+std::vector<std::vector<int>> cluster(std::vector<int> members, const std::vector<Feature>& features, Matches matches) {
+  std::stable_sort(members.begin(), members.end(),
+                   [&](int x, int y) { return features[x].area > features[y].area; });
+  std::vector<std::vector<int>> groups;
+  for (int m : members) {
+    auto group = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return matches(g.front(), m); });
+    if (group == groups.end()) groups.push_back({m});
+    else group->push_back(m);
+  }
+  return groups;
+}
+
+void add_groups(const char* kind, std::vector<std::vector<int>> groups, std::vector<FeatureRelation>& relations) {
+  for (auto& g : groups)
+    if (g.size() >= 2) {
+      std::sort(g.begin(), g.end());
+      relations.push_back({kind, g});
+    }
+}
+
+double tube_radius(const Feature& f) { return f.type == SurfaceType::Torus ? f.surface.minor : f.surface.radius; }
+
+}  // namespace
+
+void build_feature_graph(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
+                         const std::vector<Feature>& features, double angle_tolerance, double distance_tolerance,
+                         std::vector<FeatureAdjacency>& adjacency, std::vector<FeatureRelation>& relations) {
+  find_adjacency(mesh, topology, labels, features, angle_tolerance, adjacency);
+  relations.clear();
+  const double cos_tolerance = std::cos(angle_tolerance), sin_tolerance = std::sin(angle_tolerance);
+  auto parallel = [&](int x, int y) {
+    return std::abs(features[x].surface.axis.dot(features[y].surface.axis)) >= cos_tolerance;
+  };
+
+  std::vector<int> directed, radial, centred;
+  for (const Feature& f : features) {
+    if (!analytic(f) || f.triangles == 0) continue;
+    if (f.surface.has_direction()) directed.push_back(f.id);
+    if (f.type == SurfaceType::Cylinder || f.type == SurfaceType::Sphere || f.type == SurfaceType::Torus)
+      radial.push_back(f.id);
+    if (f.type == SurfaceType::Sphere || f.type == SurfaceType::Torus) centred.push_back(f.id);
+  }
+
+  const auto parallel_groups = cluster(directed, features, parallel);
+  add_groups("parallel", parallel_groups, relations);
+  for (const auto& group : parallel_groups) {
+    std::vector<int> planes, axial;
+    for (int m : group) (features[m].type == SurfaceType::Plane ? planes : axial).push_back(m);
+    add_groups("coplanar", cluster(planes, features, [&](int x, int y) {
+                 return std::abs((features[y].surface.point - features[x].surface.point).dot(features[x].surface.axis)) <= distance_tolerance;
+               }), relations);
+    add_groups("coaxial", cluster(axial, features, [&](int x, int y) {
+                 const Eigen::Vector3d d = features[y].surface.point - features[x].surface.point;
+                 return (d - d.dot(features[x].surface.axis) * features[x].surface.axis).norm() <= distance_tolerance;
+               }), relations);
+  }
+  add_groups("equal_radius", cluster(radial, features, [&](int x, int y) {
+               return std::abs(tube_radius(features[x]) - tube_radius(features[y])) <= distance_tolerance;
+             }), relations);
+  add_groups("concentric", cluster(centred, features, [&](int x, int y) {
+               return (features[x].surface.point - features[y].surface.point).norm() <= distance_tolerance;
+             }), relations);
+
+  for (const FeatureAdjacency& a : adjacency) {
+    const Feature &fa = features[a.a], &fb = features[a.b];
+    if (a.continuity == Continuity::G1) relations.push_back({"tangent", {a.a, a.b}});
+    if (analytic(fa) && analytic(fb) && fa.surface.has_direction() && fb.surface.has_direction() &&
+        std::abs(fa.surface.axis.dot(fb.surface.axis)) <= sin_tolerance)
+      relations.push_back({"perpendicular", {a.a, a.b}});
+  }
+}
+
+}  // namespace idealize

@@ -1,0 +1,19 @@
+// The feature graph: which features meet, how (sharp G0 or tangent G1), and the geometric
+// relations a designer would have used (thesis 4.3).
+#pragma once
+
+#include "feature_layer.h"
+
+namespace idealize {
+
+// Fills `adjacency` (features sharing a mesh edge, sorted by (a, b)) and `relations`:
+//   parallel, coplanar, coaxial, equal_radius, concentric: groups of two or more features
+//     (directions are plane normals and axes; radii are those of cylinders and spheres and the
+//     tube radius of tori, so a fillet's radius compares with the holes');
+//   perpendicular, tangent: pairs of adjacent features.
+// `angle_tolerance` in radians, `distance_tolerance` in model units.
+void build_feature_graph(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
+                         const std::vector<Feature>& features, double angle_tolerance, double distance_tolerance,
+                         std::vector<FeatureAdjacency>& adjacency, std::vector<FeatureRelation>& relations);
+
+}  // namespace idealize

@@ -1,0 +1,604 @@
+#include "feature_layer.h"
+
+#include "feature_graph.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <functional>
+#include <set>
+#include <cmath>
+
+namespace idealize {
+
+namespace {
+
+constexpr int kNone = -1;
+constexpr int kSeveral = -2;
+// Fits use a patch's interior vertices when it has at least this many: enough for a torus (seven
+// parameters) with noise.
+constexpr int kInteriorPoints = 24;
+// A fit is exact when its residual is below this fraction of the distance tolerance: the vertices of
+// a CAD tessellation lie on their faces (up to the file's float precision).
+constexpr double kExactFraction = 0.01;
+
+// The surface types in the order a designer models them (thesis 4.3), which is also the order of
+// preference when several fit: a short band of a large sphere fits as well as the cylinder it
+// usually is.
+constexpr std::array<SurfaceType, 5> kTypesByPreference = {SurfaceType::Plane, SurfaceType::Cylinder,
+                                                           SurfaceType::Cone, SurfaceType::Sphere,
+                                                           SurfaceType::Torus};
+
+using PatchPoints = FitData;
+
+// The label shared by all faces around each vertex, kNone if none, kSeveral if they differ.
+std::vector<int> vertex_labels(const TriangleMesh& mesh, const std::vector<int>& labels) {
+  std::vector<int> out(mesh.num_vertices(), kNone);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      int& v = out[mesh.F(f, c)];
+      if (v == kNone) v = labels[f];
+      else if (v != labels[f]) v = kSeveral;
+    }
+  return out;
+}
+
+// Points of every patch. A vertex belongs to each patch it touches, with the normal and a third of
+// the area of that patch's faces around it; fits use the patch's interior vertices when there are
+// enough of them (on a scan the rim lies on the rounded-off edge), all of them otherwise (a coarse
+// CAD face may have no interior vertex, and its rim lies on the surface).
+// What the fits see of every patch: its vertices (a third of the area of the patch's faces around
+// each) and its faces (centroid, normal, area). Fits use the patch's interior vertices when there
+// are enough of them (on a scan the rim lies on the rounded-off edge), all of them otherwise (a
+// coarse CAD face may have no interior vertex, and its rim lies on the surface).
+std::vector<PatchPoints> patch_points(const TriangleMesh& mesh, const std::vector<int>& labels, int num_patches) {
+  // Faces bucketed by patch (counting sort), then each patch's vertices gathered through a
+  // per-vertex slot that is reset after the patch.
+  std::vector<int> offset(num_patches + 1, 0);
+  for (int l : labels)
+    if (l >= 0) ++offset[l + 1];
+  for (int p = 0; p < num_patches; ++p) offset[p + 1] += offset[p];
+  std::vector<int> faces(offset[num_patches]);
+  {
+    std::vector<int> next(offset.begin(), offset.end() - 1);
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      if (labels[f] >= 0) faces[next[labels[f]]++] = f;
+  }
+  const std::vector<int> shared = vertex_labels(mesh, labels);
+  std::vector<int> slot(mesh.num_vertices(), -1);
+  std::vector<PatchPoints> out(num_patches);
+  std::vector<int> vertices;
+  std::vector<double> vertex_area;
+  for (int p = 0; p < num_patches; ++p) {
+    PatchPoints& pp = out[p];
+    const int count = offset[p + 1] - offset[p];
+    pp.sample_points.resize(count, 3);
+    pp.sample_normals.resize(count, 3);
+    pp.sample_weights.resize(count);
+    vertices.clear();
+    vertex_area.clear();
+    for (int i = 0; i < count; ++i) {
+      const int f = faces[offset[p] + i];
+      const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+      const Eigen::Vector3d n = (b - a).cross(c - a);
+      const double area = 0.5 * n.norm();
+      pp.sample_points.row(i) = (a + b + c) / 3.0;
+      pp.sample_normals.row(i) = area > 0.0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
+      pp.sample_weights[i] = area;
+      for (int k = 0; k < 3; ++k) {
+        const int v = mesh.F(f, k);
+        if (slot[v] < 0) {
+          slot[v] = static_cast<int>(vertices.size());
+          vertices.push_back(v);
+          vertex_area.push_back(0.0);
+        }
+        vertex_area[slot[v]] += area / 3.0;
+      }
+    }
+    const auto interior_count = std::count_if(vertices.begin(), vertices.end(), [&](int v) { return shared[v] == p; });
+    const bool interior_only = interior_count >= kInteriorPoints;
+    pp.points.resize(interior_only ? interior_count : static_cast<Eigen::Index>(vertices.size()), 3);
+    pp.weights.resize(pp.points.rows());
+    Eigen::Index k = 0;
+    for (size_t i = 0; i < vertices.size(); ++i) {
+      const int v = vertices[i];
+      slot[v] = -1;
+      if (interior_only && shared[v] != p) continue;
+      pp.points.row(k) = mesh.V.row(v);
+      pp.weights[k] = vertex_area[i];
+      ++k;
+    }
+  }
+  return out;
+}
+
+void set_fit(Feature& feature, const SurfaceFit& fit) {
+  feature.surface = fit.surface;
+  feature.type = fit.surface.type;
+  feature.rms = fit.rms;
+  feature.max_error = fit.max_error;
+  feature.normal_rms = fit.normal_rms;
+  feature.spread = fit.spread;
+  feature.normal_spread = fit.normal_spread;
+}
+
+// The thesis's identification (after Besl & Jain) from the signs of H and K.
+SurfaceType curvature_type(const PatchCurvature& c, const EffectiveZero& zero_h) {
+  // K = k1 k2 with both principal curvatures inside the zero range of H.
+  const double zero_k = std::pow(std::max(-zero_h.low, zero_h.high), 2);
+  if (c.mean >= zero_h.low && c.mean <= zero_h.high && std::abs(c.gaussian) <= zero_k) return SurfaceType::Plane;
+  if (std::abs(c.gaussian) <= zero_k) return SurfaceType::Cylinder;
+  return c.gaussian > 0.0 ? SurfaceType::Sphere : SurfaceType::Torus;
+}
+
+Feature identify(const PatchPoints& pp, const PatchCurvature& curvature, const EffectiveZero& zero_h,
+                 const FeatureOptions& options, double tolerance) {
+  Feature feature;
+  feature.vertices = static_cast<int>(pp.points.rows());
+  feature.curvature_type = curvature_type(curvature, zero_h);
+  feature.curvature = curvature;
+  std::array<SurfaceFit, 5> fits;
+  double best = std::numeric_limits<double>::infinity(), best_normal = best;
+  for (size_t t = 0; t < kTypesByPreference.size(); ++t) {
+    fits[t] = fit_surface(kTypesByPreference[t], pp, options.fit);
+    if (fits[t].valid) {
+      best = std::min(best, fits[t].spread);
+      best_normal = std::min(best_normal, fits[t].normal_spread);
+    }
+  }
+  // Surfaces that deviate by less than the distance tolerance are as good as equal.
+  const double accepted = options.residual_ratio * best + tolerance;
+  const double accepted_normal = options.residual_ratio * best_normal + options.normal_floor_degrees * M_PI / 180.0;
+  // The first accepted type: a more general surface always fits a little better.
+  int chosen = -1;
+  for (size_t t = 0; t < fits.size() && chosen < 0; ++t)
+    if (fits[t].valid && fits[t].spread <= accepted && fits[t].normal_spread <= accepted_normal)
+      chosen = static_cast<int>(t);
+  if (chosen < 0) return feature;  // no surface could be fitted at all
+  set_fit(feature, fits[chosen]);
+  return feature;
+}
+
+// How well a feature's surface explains face f: the largest of its vertices' distances and its
+// normal's angle, each in units of three times the fit's robust spread (3 σ) plus a floor. At most
+// 1 when the surface explains the face; infinite for a freeform feature.
+double misfit(const TriangleMesh& mesh, int f, const Feature& feature, double floor, double normal_floor) {
+  if (feature.type == SurfaceType::Freeform) return std::numeric_limits<double>::infinity();
+  const double distance_unit = 3.0 * feature.spread + floor;
+  const double angle_unit = 3.0 * feature.normal_spread + normal_floor;
+  const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+  double worst = 0.0;
+  for (const Eigen::Vector3d* v : {&a, &b, &c})
+    worst = std::max(worst, std::abs(signed_distance(feature.surface, *v)) / distance_unit);
+  const Eigen::Vector3d normal = (b - a).cross(c - a).normalized();
+  const double cosine = std::abs(normal.dot(surface_normal(feature.surface, (a + b + c) / 3.0)));
+  return std::max(worst, std::acos(std::min(cosine, 1.0)) / angle_unit);
+}
+
+// Moves faces on the rim of a patch to an edge-adjacent patch whose surface explains them when
+// their own does not, or explains them several times better (segmentation leaves the first facets
+// of a coarse fillet on the plane beside it, whose tolerances they may just meet). A moved face
+// opens its neighbours to the same test, so a whole strip moves in one call. Returns which patches
+// changed.
+std::vector<char> reassign_faces(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<Feature>& features,
+                                 const FeatureOptions& options, double floor, std::vector<int>& labels) {
+  const double normal_floor = options.normal_floor_degrees * M_PI / 180.0;
+  std::vector<char> changed(features.size(), 0);
+  std::vector<int> queue;
+  for (int f = 0; f < mesh.num_faces(); ++f) queue.push_back(f);
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int f = queue[head];
+    const int p = labels[f];
+    if (p < 0) continue;
+    int target = kNone;
+    const double own = misfit(mesh, f, features[p], floor, normal_floor);
+    // Noise alone rarely makes one surface four times better than another.
+    double best = own > 1.0 ? 1.0 : own / 4.0;
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(f, c);
+      if (g < 0 || labels[g] < 0 || labels[g] == p) continue;
+      const double m = misfit(mesh, f, features[labels[g]], floor, normal_floor);
+      if (m < best) {
+        best = m;
+        target = labels[g];
+      }
+    }
+    if (target == kNone) continue;
+    labels[f] = target;
+    changed[p] = changed[target] = 1;
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(f, c);
+      if (g >= 0 && labels[g] == p) queue.push_back(g);
+    }
+  }
+  return changed;
+}
+
+// Merges adjacent patches whose union one surface fits as well as each part alone: a fillet or a
+// cylinder that segmentation split along the facet folds of a coarse tessellation. Patches of one
+// type are refitted together; a patch too small to have interior vertices may also join a
+// neighbour of another type (a single facet of a fillet is planar). Plain RMS values decide
+// here, not the robust spreads, which would not see a small foreign face in the union. Each patch
+// merges at most once per call; `rejected` remembers the pairs that did not fit together until one
+// of them grows. Returns whether any pair merged.
+bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<PatchPoints>& points,
+                   const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
+                   const FeatureOptions& options, double tolerance, std::vector<Feature>& features,
+                   std::vector<int>& labels, std::set<std::pair<int, int>>& rejected) {
+  std::vector<std::pair<int, int>> pairs;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(f, c);
+      if (g < f || labels[f] < 0 || labels[g] < 0 || labels[f] == labels[g]) continue;
+      pairs.emplace_back(std::min(labels[f], labels[g]), std::max(labels[f], labels[g]));
+    }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+
+  struct Candidate {
+    double cost;
+    int a, b;
+    Feature feature;
+  };
+  std::vector<Candidate> candidates;
+  const double normal_floor = options.normal_floor_degrees * M_PI / 180.0;
+  for (const auto& [a, b] : pairs) {
+    if (rejected.count({a, b})) continue;  // neither changed since
+    const Feature &fa = features[a], &fb = features[b];
+    const PatchPoints &pa = points[a], &pb = points[b];
+    const bool small = std::min(pa.points.rows(), pb.points.rows()) < kInteriorPoints;
+    const bool same_type = fa.type == fb.type && fa.type != SurfaceType::Freeform;
+    if (!same_type && !small) continue;
+    const PatchPoints both = concatenate(pa, pb);
+    const Feature& larger = pa.weights.sum() >= pb.weights.sum() ? fa : fb;
+    const double limit = options.residual_ratio * std::max(fa.rms, fb.rms) + tolerance;
+    const double normal_limit = options.residual_ratio * std::max(fa.normal_rms, fb.normal_rms) + normal_floor;
+    auto accepted = [&](const Feature& u) {
+      return u.type != SurfaceType::Freeform && u.rms <= limit && u.normal_rms <= normal_limit;
+    };
+    Feature merged = larger;
+    bool ok = false;
+    if (same_type) {
+      const SurfaceFit fit = fit_surface(larger.type, both, options.fit, &larger.surface);
+      if (fit.valid) {
+        set_fit(merged, fit);
+        ok = accepted(merged);
+      }
+    }
+    if (!ok && small) {
+      merged = identify_points(both, larger.curvature);
+      ok = accepted(merged);
+    }
+    if (ok) candidates.push_back({merged.rms / limit, a, b, merged});
+    else rejected.insert({a, b});
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
+    return x.cost != y.cost ? x.cost < y.cost : std::make_pair(x.a, x.b) < std::make_pair(y.a, y.b);
+  });
+  std::vector<char> merged(features.size(), 0);
+  std::vector<int> into(features.size());
+  for (size_t p = 0; p < into.size(); ++p) into[p] = static_cast<int>(p);
+  bool any = false;
+  for (const Candidate& c : candidates) {
+    if (merged[c.a] || merged[c.b]) continue;
+    merged[c.a] = merged[c.b] = 1;
+    into[c.b] = c.a;
+    const int id = features[c.a].id;
+    features[c.a] = c.feature;
+    features[c.a].id = id;
+    any = true;
+  }
+  for (int& l : labels)
+    if (l >= 0) l = into[l];
+  for (auto it = rejected.begin(); it != rejected.end();)  // pairs with a grown patch are open again
+    it = merged[it->first] || merged[it->second] ? rejected.erase(it) : std::next(it);
+  return any;
+}
+
+// Splits a patch that no surface fits (the segmentation merged faces across an edge it did not
+// resolve) into planar regions grown from its largest faces: a face joins while its vertices lie
+// within 3 σ of the region's plane and its normal within 3 σ of the plane's, σ being the noise of
+// the mesh's well-fitted patches. Curved parts fall apart into planar strips that merging joins
+// again. The first region keeps the patch's id, the others get new ids from `next_id` on.
+int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
+                double normal_noise, std::vector<int>& labels, int next_id) {
+  std::vector<int> faces;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (labels[f] == patch) faces.push_back(f);
+  const Eigen::VectorXd area = face_areas(mesh);
+  std::stable_sort(faces.begin(), faces.end(), [&](int x, int y) { return area[x] > area[y]; });
+  auto normal_of = [&](int f) {
+    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+    return Eigen::Vector3d((b - a).cross(c - a).normalized());
+  };
+  std::vector<char> open(mesh.num_faces(), 0);
+  for (int f : faces) open[f] = 1;
+  const double cos_limit = std::cos(std::min(3.0 * normal_noise, 0.5 * M_PI));
+  bool first = true;
+  for (int seed : faces) {
+    if (!open[seed]) continue;
+    Surface plane;
+    plane.type = SurfaceType::Plane;
+    plane.axis = normal_of(seed);
+    plane.point = (mesh.V.row(mesh.F(seed, 0)) + mesh.V.row(mesh.F(seed, 1)) + mesh.V.row(mesh.F(seed, 2))).transpose() / 3.0;
+    std::vector<int> region{seed}, queue{seed};
+    open[seed] = 0;
+    size_t fitted = 1;
+    Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double weight = 0.0;
+    auto accumulate = [&](int f) {
+      for (int c = 0; c < 3; ++c) {
+        const Eigen::Vector3d v = mesh.V.row(mesh.F(f, c));
+        moment += area[f] * v * v.transpose();
+        sum += area[f] * v;
+        weight += area[f];
+      }
+    };
+    accumulate(seed);
+    for (size_t head = 0; head < queue.size(); ++head) {
+      const int f = queue[head];
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(f, c);
+        if (g < 0 || !open[g] || std::abs(normal_of(g).dot(plane.axis)) < cos_limit) continue;
+        bool near = true;
+        for (int k = 0; k < 3 && near; ++k)
+          near = std::abs(signed_distance(plane, mesh.V.row(mesh.F(g, k)).transpose())) <= 3.0 * noise;
+        if (!near) continue;
+        open[g] = 0;
+        region.push_back(g);
+        queue.push_back(g);
+        accumulate(g);
+        if (region.size() >= 2 * fitted) {  // refit the plane as the region doubles
+          const Eigen::Vector3d centre = sum / weight;
+          const Eigen::Matrix3d covariance = moment / weight - centre * centre.transpose();
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+          Eigen::Vector3d axis = solver.eigenvectors().col(0);
+          plane.axis = axis.dot(plane.axis) < 0.0 ? Eigen::Vector3d(-axis) : axis;
+          plane.point = centre;
+          fitted = region.size();
+        }
+      }
+    }
+    const int id = first ? patch : next_id++;
+    first = false;
+    for (int f : region) labels[f] = id;
+  }
+  return next_id;
+}
+
+// Splitting runs on exact tessellations only, where faces that the segmentation merged come apart
+// into pieces that their surfaces fit exactly. Where most of a patch ended in pieces that fit only
+// approximately (to more than `exact` RMS), it was a freeform surface: the split is undone and the
+// patch identified afresh.
+void undo_inexact_splits(const TriangleMesh& mesh, const std::vector<int>& original, const std::vector<char>& was_split,
+                         double exact, const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
+                         const std::vector<PatchCurvature>& curvature, std::vector<Feature>& features,
+                         std::vector<int>& labels) {
+  const Eigen::VectorXd area = face_areas(mesh);
+  std::vector<double> total(was_split.size(), 0.0), fragmented(was_split.size(), 0.0);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int o = original[f], l = labels[f];
+    if (o < 0 || !was_split[o] || l < 0) continue;
+    total[o] += area[f];
+    if (features[l].type == SurfaceType::Freeform || features[l].rms > exact) fragmented[o] += area[f];
+  }
+  std::vector<char> undo(was_split.size(), 0);
+  bool any = false;
+  for (size_t o = 0; o < was_split.size(); ++o) any |= undo[o] = was_split[o] && fragmented[o] > 0.5 * total[o];
+  if (!any) return;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (original[f] >= 0 && undo[original[f]]) labels[f] = original[f];
+  const std::vector<PatchPoints> whole = patch_points(mesh, labels, static_cast<int>(features.size()));
+  for (size_t o = 0; o < undo.size(); ++o)
+    if (undo[o]) {
+      const int id = features[o].id;
+      features[o] = identify_points(whole[o], curvature[o]);
+      features[o].id = id;
+    }
+}
+
+// Drops features left without faces and renumbers the rest in order.
+void compact_features(std::vector<int>& labels, std::vector<Feature>& features) {
+  std::vector<int> used(features.size(), 0);
+  for (int l : labels)
+    if (l >= 0) used[l] = 1;
+  std::vector<int> renumber(features.size(), kNone);
+  std::vector<Feature> kept;
+  for (size_t p = 0; p < features.size(); ++p)
+    if (used[p]) {
+      renumber[p] = static_cast<int>(kept.size());
+      kept.push_back(features[p]);
+      kept.back().id = renumber[p];
+    }
+  for (int& l : labels)
+    if (l >= 0) l = renumber[l];
+  features = std::move(kept);
+}
+
+// Moves every input vertex onto the surfaces of the features around it: onto the one surface
+// inside a patch, onto the intersection of two or three along edges and at corners (alternating
+// projections, which converge to the nearest common point of transversal surfaces).
+void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
+                      const std::vector<Feature>& features, double tolerance, FeatureLayer& layer) {
+  layer.idealized_vertices = mesh.V;
+  double sum = 0.0;
+  int measured = 0;
+  layer.max_deviation = 0.0;
+  std::vector<int> around;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    around.clear();
+    for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f) {
+      const int p = labels[*f];
+      if (p >= 0 && features[p].type != SurfaceType::Freeform &&
+          std::find(around.begin(), around.end(), p) == around.end())
+        around.push_back(p);
+    }
+    if (around.empty()) continue;
+    const Eigen::Vector3d original = mesh.V.row(v);
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int p : around) nearest = std::min(nearest, std::abs(signed_distance(features[p].surface, original)));
+    sum += nearest * nearest;
+    ++measured;
+    layer.max_deviation = std::max(layer.max_deviation, nearest);
+
+    Eigen::Vector3d x = original;
+    const int rounds = around.size() == 1 ? 1 : 50;
+    for (int r = 0; r < rounds; ++r) {
+      const Eigen::Vector3d before = x;
+      for (int p : around) x = closest_point(features[p].surface, x);
+      if ((x - before).norm() < 1e-6 * tolerance) break;
+    }
+    // Nearly tangent surfaces intersect far from where they touch: never move a vertex further
+    // than its own patch allows.
+    if ((x - original).norm() > std::max(nearest, tolerance) * 10.0) x = closest_point(features[around[0]].surface, original);
+    layer.idealized_vertices.row(v) = x;
+  }
+  layer.rms_deviation = measured > 0 ? std::sqrt(sum / measured) : 0.0;
+}
+
+}  // namespace
+
+FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>& labels,
+                               const std::vector<PatchCurvature>& patch_curvature,
+                               const EffectiveZero& zero_mean_curvature, const FeatureOptions& options) {
+  if (static_cast<int>(labels.size()) != mesh.num_faces())
+    throw MeshError("the labels do not match the mesh (one label per triangle is needed)");
+  const int num_patches = static_cast<int>(patch_curvature.size());
+  for (int label : labels)
+    if (label >= num_patches) throw MeshError("a triangle label names a patch that does not exist");
+
+  FeatureLayer layer;
+  auto start = std::chrono::steady_clock::now();
+  auto stage = [&](const char* name) {
+    const auto now = std::chrono::steady_clock::now();
+    layer.timings.emplace_back(name, std::chrono::duration<double>(now - start).count());
+    start = now;
+  };
+  const double diagonal = bounding_box_diagonal(mesh);
+  layer.distance_tolerance = options.distance_tolerance > 0.0 ? options.distance_tolerance : 1e-3 * diagonal;
+  const double floor = 1e-6 * diagonal;  // rounding of single-precision STL coordinates, with margin
+
+  const MeshTopology topology(mesh);
+  layer.labels = labels;
+  std::vector<PatchCurvature> curvature = patch_curvature;  // grows with split patches
+  std::vector<char> was_split(num_patches, 0);
+  auto identify_points = [&](const PatchPoints& pp, const PatchCurvature& c) {
+    return identify(pp, c, zero_mean_curvature, options, layer.distance_tolerance);
+  };
+  auto identify_all = [&](const std::vector<PatchPoints>& points, const std::vector<char>& which) {
+    layer.features.resize(points.size());
+    for (size_t p = 0; p < points.size(); ++p)
+      if (which[p]) layer.features[p] = identify_points(points[p], curvature[p]);
+  };
+  std::vector<PatchPoints> points = patch_points(mesh, layer.labels, num_patches);
+  identify_all(points, std::vector<char>(num_patches, 1));
+
+  // Split what no surface fits, into planar regions that merging below joins again where one
+  // surface fits them together. Only on exact tessellations (the typical patch fits to a hundredth
+  // of the tolerance, as the vertices of a CAD export lie on their faces): under scan noise, planar
+  // growing breaks curved faces into strips too noisy to join again.
+  {
+    std::vector<double> rms, normal_rms;
+    for (const Feature& f : layer.features)
+      if (f.type != SurfaceType::Freeform) {
+        rms.push_back(f.spread);
+        normal_rms.push_back(f.normal_spread);
+      }
+    if (!rms.empty()) std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
+    if (!rms.empty() && rms[rms.size() / 2] < kExactFraction * layer.distance_tolerance) {
+      std::nth_element(normal_rms.begin(), normal_rms.begin() + normal_rms.size() / 2, normal_rms.end());
+      const double noise = rms[rms.size() / 2] + floor;
+      const double normal_noise = normal_rms[normal_rms.size() / 2] + options.normal_floor_degrees * M_PI / 180.0;
+      int next_id = num_patches;
+      for (int p = 0; p < num_patches; ++p) {
+        const Feature& f = layer.features[p];
+        if (f.type == SurfaceType::Freeform || f.rms > options.freeform_ratio * noise + layer.distance_tolerance) {
+          next_id = split_patch(mesh, topology, p, noise, normal_noise, layer.labels, next_id);
+          was_split[p] = 1;
+        }
+      }
+      if (next_id > num_patches) {
+        std::vector<char> which(next_id, 0);
+        for (int l : layer.labels)
+          if (l >= 0 && l < num_patches && layer.features[l].type == SurfaceType::Freeform) which[l] = 1;
+        for (int p = 0; p < num_patches; ++p)
+          if (layer.features[p].rms > options.freeform_ratio * noise + layer.distance_tolerance) which[p] = 1;
+        for (int p = num_patches; p < next_id; ++p) which[p] = 1;
+        curvature.resize(next_id);
+        for (int f = 0; f < mesh.num_faces(); ++f)  // a split region keeps the curvature of its patch
+          if (layer.labels[f] >= num_patches) curvature[layer.labels[f]] = patch_curvature[labels[f]];
+        points = patch_points(mesh, layer.labels, next_id);
+        identify_all(points, which);
+      }
+    }
+  }
+  const int patches = static_cast<int>(layer.features.size());
+
+  // Move rim faces to the neighbour that explains them, refine the surfaces of the patches that
+  // changed (same type, starting from the previous fit), and finally identify those afresh. Runs
+  // again after merging, which brings surfaces that explain more of their neighbours' rims.
+  auto reassign = [&] {
+    std::vector<char> ever_changed(patches, 0);
+    for (int round = 0; round < options.reassignment_rounds; ++round) {
+      const std::vector<char> changed = reassign_faces(mesh, topology, layer.features, options, floor, layer.labels);
+      if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
+      points = patch_points(mesh, layer.labels, patches);
+      for (int p = 0; p < patches; ++p) {
+        if (!changed[p]) continue;
+        ever_changed[p] = 1;
+        Feature& f = layer.features[p];
+        if (f.type == SurfaceType::Freeform) continue;
+        const SurfaceFit fit = fit_surface(f.type, points[p], options.fit, &f.surface);
+        if (fit.valid) set_fit(f, fit);
+      }
+    }
+    identify_all(points, ever_changed);
+  };
+  reassign();
+  std::set<std::pair<int, int>> rejected;
+  for (int pass = 0; pass < options.merge_passes; ++pass) {
+    if (!merge_patches(mesh, topology, points, identify_points, options, layer.distance_tolerance, layer.features,
+                       layer.labels, rejected))
+      break;
+    points = patch_points(mesh, layer.labels, patches);
+  }
+  reassign();
+  undo_inexact_splits(mesh, labels, was_split, kExactFraction * layer.distance_tolerance, identify_points, curvature,
+                      layer.features, layer.labels);
+  compact_features(layer.labels, layer.features);
+  const Eigen::VectorXd area = face_areas(mesh);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (layer.labels[f] >= 0) {
+      layer.features[layer.labels[f]].area += area[f];
+      ++layer.features[layer.labels[f]].triangles;
+    }
+
+  // Freeform: the best fit is much worse than the typical patch of this mesh (which takes a few
+  // patches to tell; with fewer, the tolerances alone decide).
+  std::vector<double> residuals;
+  for (const Feature& f : layer.features)
+    if (f.type != SurfaceType::Freeform) residuals.push_back(f.spread);
+  double typical = floor;
+  if (residuals.size() >= 3) {
+    std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
+    typical = std::max(residuals[residuals.size() / 2], floor);
+  }
+  for (Feature& f : layer.features)
+    if (f.spread > options.freeform_ratio * typical && f.spread > layer.distance_tolerance &&
+        f.spread > options.freeform_relative_size * std::sqrt(f.area))
+      f.type = SurfaceType::Freeform;
+  stage("identify");
+
+  build_feature_graph(mesh, topology, layer.labels, layer.features, options.angle_tolerance_degrees * M_PI / 180.0,
+                      layer.distance_tolerance, layer.adjacency, layer.relations);
+  stage("relations");
+  project_vertices(mesh, topology, layer.labels, layer.features, layer.distance_tolerance, layer);
+  stage("projection");
+  return layer;
+}
+
+}  // namespace idealize

@@ -1,0 +1,53 @@
+// The analytic surfaces a prismatic feature can lie on, and their point-surface geometry.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstddef>
+
+namespace idealize {
+
+enum class SurfaceType { Plane, Cylinder, Cone, Sphere, Torus, Freeform };
+
+// Name used in reports: "plane", "cylinder", "cone", "sphere", "torus", "freeform".
+const char* surface_type_name(SurfaceType type);
+
+// One analytic surface. Which members are used depends on the type:
+//   plane     point on the plane, axis = unit normal
+//   cylinder  point on the axis, axis = unit direction, radius
+//   cone      point = apex, axis = unit direction towards the opening, half_angle (radians)
+//   sphere    point = centre, radius
+//   torus     point = centre, axis = unit direction, radius = major, minor
+struct Surface {
+  SurfaceType type = SurfaceType::Freeform;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  double radius = 0.0;
+  double minor = 0.0;
+  double half_angle = 0.0;
+
+  // Whether the surface has an axis (cylinder, cone, torus) or a normal direction (plane).
+  bool has_direction() const { return type != SurfaceType::Sphere && type != SurfaceType::Freeform; }
+  bool is_axial() const {
+    return type == SurfaceType::Cylinder || type == SurfaceType::Cone || type == SurfaceType::Torus;
+  }
+};
+
+// Signed distance of p from the surface (positive on the side away from the axis or centre, and
+// along the normal of a plane). Freeform surfaces have none: returns 0.
+double signed_distance(const Surface& surface, const Eigen::Vector3d& p);
+
+// Signed distances of the n points p[0..n) into out[0..n): the same as signed_distance, faster.
+void signed_distances(const Surface& surface, const Eigen::Vector3d* p, size_t n, double* out);
+
+// The closest point of the surface to p (p itself for a freeform surface).
+Eigen::Vector3d closest_point(const Surface& surface, const Eigen::Vector3d& p);
+
+// Unit surface normal at the point of the surface closest to p, pointing to positive distances.
+Eigen::Vector3d surface_normal(const Surface& surface, const Eigen::Vector3d& p);
+
+// Two unit vectors completing `axis` (unit) to a right-handed orthonormal frame, chosen
+// deterministically from the axis alone.
+void orthonormal_frame(const Eigen::Vector3d& axis, Eigen::Vector3d& e1, Eigen::Vector3d& e2);
+
+}  // namespace idealize

@@ -1,0 +1,462 @@
+#include "surface_fitting.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace idealize {
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+int parameter_count(SurfaceType type) {
+  switch (type) {
+    case SurfaceType::Plane: return 3;
+    case SurfaceType::Sphere: return 4;
+    case SurfaceType::Cylinder: return 5;
+    case SurfaceType::Cone: return 6;
+    case SurfaceType::Torus: return 7;
+    case SurfaceType::Freeform: return 0;
+  }
+  return 0;
+}
+
+// The surface moved by a small parameter step `d` (parameter_count entries): the axis tilts in
+// its own frame, so every step is a local, minimal parametrisation.
+Surface perturbed(const Surface& s, const double* d) {
+  Surface out = s;
+  Eigen::Vector3d e1, e2;
+  orthonormal_frame(s.axis, e1, e2);
+  auto tilt_axis = [&] { out.axis = (s.axis + d[0] * e1 + d[1] * e2).normalized(); };
+  switch (s.type) {
+    case SurfaceType::Plane:
+      tilt_axis();
+      out.point += d[2] * s.axis;
+      break;
+    case SurfaceType::Sphere:
+      out.point += Eigen::Vector3d(d[0], d[1], d[2]);
+      out.radius += d[3];
+      break;
+    case SurfaceType::Cylinder:
+      tilt_axis();
+      out.point += d[2] * e1 + d[3] * e2;
+      out.radius += d[4];
+      break;
+    case SurfaceType::Cone:
+      tilt_axis();
+      out.point += Eigen::Vector3d(d[2], d[3], d[4]);
+      out.half_angle += d[5];
+      break;
+    case SurfaceType::Torus:
+      tilt_axis();
+      out.point += Eigen::Vector3d(d[2], d[3], d[4]);
+      out.radius += d[5];
+      out.minor += d[6];
+      break;
+    case SurfaceType::Freeform: break;
+  }
+  return out;
+}
+
+bool plausible(const Surface& s) {
+  const bool finite = s.point.allFinite() && s.axis.allFinite() && std::isfinite(s.radius) &&
+                      std::isfinite(s.minor) && std::isfinite(s.half_angle);
+  if (!finite) return false;
+  switch (s.type) {
+    case SurfaceType::Sphere:
+    case SurfaceType::Cylinder: return s.radius > 0.0;
+    case SurfaceType::Cone: return s.half_angle > 0.0 && s.half_angle < 0.5 * M_PI;
+    case SurfaceType::Torus: return s.minor > 0.0 && s.radius >= 0.0;
+    default: return true;
+  }
+}
+
+// Weighted points and normals in a frame centred on their centroid and scaled to unit RMS
+// radius, so that lengths and angles weigh alike in the refinement.
+struct Sample {
+  std::vector<Eigen::Vector3d> p;  // points
+  std::vector<double> w;           // their weights, summing to 1
+  std::vector<Eigen::Vector3d> q, n;  // oriented samples: positions and normals
+  std::vector<double> v;              // their weights, summing to 1
+};
+
+Eigen::Vector3d smallest_eigenvector(const Eigen::Matrix3d& m) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(m);
+  return solver.eigenvectors().col(0);
+}
+
+// Circle through 2D points, algebraic (Kåsa) fit: returns false when the points are collinear.
+bool fit_circle_2d(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& w,
+                   Eigen::Vector2d& centre, double& radius) {
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < q.size(); ++i) {
+    const Eigen::Vector3d row(2.0 * q[i].x(), 2.0 * q[i].y(), 1.0);
+    a += w[i] * row * row.transpose();
+    b += w[i] * row * q[i].squaredNorm();
+  }
+  const Eigen::Vector3d x = a.ldlt().solve(b);
+  centre = x.head<2>();
+  const double r2 = x[2] + centre.squaredNorm();
+  radius = r2 > 0.0 ? std::sqrt(r2) : 0.0;
+  return x.allFinite() && radius > 0.0;
+}
+
+Eigen::Vector3d weighted_mean(const std::vector<Eigen::Vector3d>& v, const std::vector<double>& w) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < v.size(); ++i) sum += w[i] * v[i];
+  return sum;
+}
+
+// Direction along which the normals vary least: the axis of a cylinder or cone.
+Eigen::Vector3d constant_angle_axis(const Sample& s) {
+  const Eigen::Vector3d mean = weighted_mean(s.n, s.v);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < s.n.size(); ++i) cov += s.v[i] * (s.n[i] - mean) * (s.n[i] - mean).transpose();
+  return smallest_eigenvector(cov);
+}
+
+// Height along and distance from an axis, for profile fits.
+void profile(const Sample& s, const Eigen::Vector3d& origin, const Eigen::Vector3d& axis,
+             std::vector<Eigen::Vector2d>& zr) {
+  zr.resize(s.p.size());
+  for (size_t i = 0; i < s.p.size(); ++i) {
+    const Eigen::Vector3d q = s.p[i] - origin;
+    const double z = q.dot(axis);
+    zr[i] = Eigen::Vector2d(z, (q - z * axis).norm());
+  }
+}
+
+Surface seed_plane(const Sample& s) {
+  Surface out;
+  out.type = SurfaceType::Plane;
+  out.point = weighted_mean(s.p, s.w);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < s.p.size(); ++i) cov += s.w[i] * (s.p[i] - out.point) * (s.p[i] - out.point).transpose();
+  out.axis = smallest_eigenvector(cov);
+  if (out.axis.dot(weighted_mean(s.n, s.v)) < 0.0) out.axis = -out.axis;
+  return out;
+}
+
+Surface seed_sphere(const Sample& s) {
+  Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d b = Eigen::Vector4d::Zero();
+  for (size_t i = 0; i < s.p.size(); ++i) {
+    const Eigen::Vector4d row(2.0 * s.p[i].x(), 2.0 * s.p[i].y(), 2.0 * s.p[i].z(), 1.0);
+    a += s.w[i] * row * row.transpose();
+    b += s.w[i] * row * s.p[i].squaredNorm();
+  }
+  const Eigen::Vector4d x = a.ldlt().solve(b);
+  Surface out;
+  out.type = SurfaceType::Sphere;
+  out.point = x.head<3>();
+  const double r2 = x[3] + out.point.squaredNorm();
+  out.radius = r2 > 0.0 ? std::sqrt(r2) : 0.0;
+  return out;
+}
+
+Surface seed_cylinder(const Sample& s) {
+  Surface out;
+  out.type = SurfaceType::Cylinder;
+  out.axis = constant_angle_axis(s);
+  Eigen::Vector3d e1, e2;
+  orthonormal_frame(out.axis, e1, e2);
+  std::vector<Eigen::Vector2d> q(s.p.size());
+  for (size_t i = 0; i < s.p.size(); ++i) q[i] = Eigen::Vector2d(s.p[i].dot(e1), s.p[i].dot(e2));
+  Eigen::Vector2d centre;
+  if (!fit_circle_2d(q, s.w, centre, out.radius)) out.radius = 0.0;
+  out.point = centre.x() * e1 + centre.y() * e2;
+  return out;
+}
+
+Surface seed_cone(const Sample& s) {
+  Surface out;
+  out.type = SurfaceType::Cone;
+  out.axis = constant_angle_axis(s);
+  // Every normal line meets the axis: with the axis direction a known, its moment m = c × a
+  // (m ⟂ a) solves a·(p × n) + n·m = 0 in the least-squares sense.
+  Eigen::Vector3d e1, e2;
+  orthonormal_frame(out.axis, e1, e2);
+  Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < s.q.size(); ++i) {
+    const Eigen::Vector2d row(s.n[i].dot(e1), s.n[i].dot(e2));
+    a += s.v[i] * row * row.transpose();
+    b -= s.v[i] * row * out.axis.dot(s.q[i].cross(s.n[i]));
+  }
+  const Eigen::Vector2d m = a.ldlt().solve(b);
+  const Eigen::Vector3d origin = out.axis.cross(m.x() * e1 + m.y() * e2);
+  // Profile: distance from the axis grows linearly with the height, ρ = ρ0 + t z.
+  std::vector<Eigen::Vector2d> zr;
+  profile(s, origin, out.axis, zr);
+  Eigen::Matrix2d la = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d lb = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < zr.size(); ++i) {
+    const Eigen::Vector2d row(1.0, zr[i].x());
+    la += s.w[i] * row * row.transpose();
+    lb += s.w[i] * row * zr[i].y();
+  }
+  Eigen::Vector2d line = la.ldlt().solve(lb);
+  if (line[1] < 0.0) {
+    out.axis = -out.axis;
+    line[1] = -line[1];
+  }
+  out.half_angle = std::atan(line[1]);
+  out.point = origin - (line[0] / line[1]) * out.axis;
+  return out;
+}
+
+Surface seed_torus(const Sample& s) {
+  // The axis (direction a, moment m) meets every normal line (n, p × n): a·(p × n) + n·m = 0,
+  // the smallest eigenvector of the 6 x 6 moment matrix.
+  Eigen::Matrix<double, 6, 6> m = Eigen::Matrix<double, 6, 6>::Zero();
+  for (size_t i = 0; i < s.q.size(); ++i) {
+    Eigen::Matrix<double, 6, 1> line;
+    line << s.q[i].cross(s.n[i]), s.n[i];
+    m += s.v[i] * line * line.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> solver(m);
+  const Eigen::Matrix<double, 6, 1> x = solver.eigenvectors().col(0);
+  Surface out;
+  out.type = SurfaceType::Torus;
+  Eigen::Vector3d a = x.head<3>(), moment = x.tail<3>();
+  const double length = a.norm();
+  if (!(length > 1e-9)) return out;  // normals all parallel: no axis
+  moment -= (a.dot(moment) / (length * length)) * a;
+  const Eigen::Vector3d origin = a.cross(moment) / (length * length);
+  out.axis = a / length;
+  std::vector<Eigen::Vector2d> zr;
+  profile(s, origin, out.axis, zr);
+  Eigen::Vector2d tube;
+  if (!fit_circle_2d(zr, s.w, tube, out.minor)) return out;
+  out.point = origin + tube.x() * out.axis;
+  out.radius = tube.y();
+  return out;
+}
+
+Surface seed(SurfaceType type, const Sample& s) {
+  switch (type) {
+    case SurfaceType::Plane: return seed_plane(s);
+    case SurfaceType::Sphere: return seed_sphere(s);
+    case SurfaceType::Cylinder: return seed_cylinder(s);
+    case SurfaceType::Cone: return seed_cone(s);
+    case SurfaceType::Torus: return seed_torus(s);
+    case SurfaceType::Freeform: break;
+  }
+  return Surface{};
+}
+
+double cost(const Surface& surface, const Sample& s, const std::vector<double>& w, std::vector<double>& d) {
+  signed_distances(surface, s.p.data(), s.p.size(), d.data());
+  double sum = 0.0;
+  for (size_t i = 0; i < d.size(); ++i) sum += w[i] * d[i] * d[i];
+  return sum;
+}
+
+// Levenberg–Marquardt on the weighted geometric distances, forward-difference Jacobian.
+Surface refine(Surface surface, const Sample& s, const std::vector<double>& w, int max_iterations) {
+  const int k = parameter_count(surface.type);
+  const int n = static_cast<int>(s.p.size());
+  if (n < k) return surface;
+  constexpr double kStep = 1e-7;
+  Eigen::MatrixXd jacobian(n, k);
+  Eigen::VectorXd residual(n);
+  std::vector<double> d(n), sqrt_w(n);
+  for (int i = 0; i < n; ++i) sqrt_w[i] = std::sqrt(w[i]);
+  double current = cost(surface, s, w, d);
+  double lambda = 1e-3;
+  for (int it = 0; it < max_iterations; ++it) {
+    signed_distances(surface, s.p.data(), n, d.data());
+    for (int i = 0; i < n; ++i) residual[i] = sqrt_w[i] * d[i];
+    for (int j = 0; j < k; ++j) {
+      double step[7] = {0, 0, 0, 0, 0, 0, 0};
+      step[j] = kStep;
+      signed_distances(perturbed(surface, step), s.p.data(), n, d.data());
+      for (int i = 0; i < n; ++i) jacobian(i, j) = (sqrt_w[i] * d[i] - residual[i]) / kStep;
+    }
+    const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
+    const Eigen::VectorXd gradient = jacobian.transpose() * residual;
+    bool improved = false;
+    while (lambda < 1e12) {
+      Eigen::MatrixXd damped = normal;
+      damped.diagonal() += lambda * (normal.diagonal().array() + 1e-12).matrix();
+      const Eigen::VectorXd step = damped.ldlt().solve(-gradient);
+      const Surface candidate = perturbed(surface, step.data());
+      const double next = plausible(candidate) ? cost(candidate, s, w, d) : kInfinity;
+      if (next < current) {
+        const double decrease = current - next;
+        surface = candidate;
+        current = next;
+        lambda = std::max(lambda * 0.3, 1e-12);
+        improved = decrease > 1e-10 * current;
+        break;
+      }
+      lambda *= 4.0;
+    }
+    if (!improved) break;
+  }
+  return surface;
+}
+
+// Huber weights for residuals scaled by their robust spread (1.345 σ: 95 % efficiency on
+// Gaussian noise).
+std::vector<double> huber_weights(const Surface& surface, const Sample& s) {
+  std::vector<double> distance(s.p.size());
+  for (size_t i = 0; i < s.p.size(); ++i) distance[i] = std::abs(signed_distance(surface, s.p[i]));
+  std::vector<double> sorted = distance;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double limit = 1.345 * 1.4826 * sorted[sorted.size() / 2];
+  std::vector<double> w = s.w;
+  double total = 0.0;
+  for (size_t i = 0; i < w.size(); ++i) {
+    if (limit > 0.0 && distance[i] > limit) w[i] *= limit / distance[i];
+    total += w[i];
+  }
+  for (double& x : w) x /= total;
+  return w;
+}
+
+Surface to_local(Surface s, const Eigen::Vector3d& centre, double scale) {
+  s.point = (s.point - centre) / scale;
+  s.radius /= scale;
+  s.minor /= scale;
+  return s;
+}
+
+Surface to_world(Surface s, const Eigen::Vector3d& centre, double scale) {
+  s.point = centre + scale * s.point;
+  s.radius *= scale;
+  s.minor *= scale;
+  return s;
+}
+
+}  // namespace
+
+void fit_residuals(const Surface& surface, const MatrixX3d& points, const Eigen::VectorXd& weights,
+                   double& rms, double& max_error) {
+  double sum = 0.0, total = 0.0;
+  max_error = 0.0;
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const double d = signed_distance(surface, points.row(i).transpose());
+    sum += weights[i] * d * d;
+    total += weights[i];
+    max_error = std::max(max_error, std::abs(d));
+  }
+  rms = total > 0.0 ? std::sqrt(sum / total) : 0.0;
+}
+
+namespace {
+
+double weighted_median(std::vector<std::pair<double, double>>& values) {  // (value, weight)
+  std::sort(values.begin(), values.end());
+  double total = 0.0;
+  for (const auto& v : values) total += v.second;
+  double running = 0.0;
+  for (const auto& v : values) {
+    running += v.second;
+    if (running >= 0.5 * total) return v.first;
+  }
+  return values.empty() ? 0.0 : values.back().first;
+}
+
+// Robust spreads of the distances of the points and the normal angles of the samples.
+void robust_spreads(const Surface& surface, const FitData& data, double& spread, double& normal_spread) {
+  std::vector<std::pair<double, double>> distance(data.points.rows()), angle(data.sample_points.rows());
+  for (Eigen::Index i = 0; i < data.points.rows(); ++i)
+    distance[i] = {std::abs(signed_distance(surface, data.points.row(i).transpose())), data.weights[i]};
+  for (Eigen::Index i = 0; i < data.sample_points.rows(); ++i) {
+    const double c = std::abs(surface_normal(surface, data.sample_points.row(i).transpose()).dot(data.sample_normals.row(i).transpose()));
+    angle[i] = {std::acos(std::min(c, 1.0)), data.sample_weights[i]};
+  }
+  spread = 1.4826 * weighted_median(distance);
+  normal_spread = 1.4826 * weighted_median(angle);
+}
+
+}  // namespace
+
+double normal_residual(const Surface& surface, const MatrixX3d& points, const MatrixX3d& normals,
+                       const Eigen::VectorXd& weights) {
+  double sum = 0.0, total = 0.0;
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const double c = std::abs(surface_normal(surface, points.row(i).transpose()).dot(normals.row(i).transpose()));
+    const double angle = std::acos(std::min(c, 1.0));
+    sum += weights[i] * angle * angle;
+    total += weights[i];
+  }
+  return total > 0.0 ? std::sqrt(sum / total) : 0.0;
+}
+
+FitData concatenate(const FitData& a, const FitData& b) {
+  FitData out;
+  out.points.resize(a.points.rows() + b.points.rows(), 3);
+  out.points << a.points, b.points;
+  out.weights.resize(out.points.rows());
+  out.weights << a.weights, b.weights;
+  out.sample_points.resize(a.sample_points.rows() + b.sample_points.rows(), 3);
+  out.sample_points << a.sample_points, b.sample_points;
+  out.sample_normals.resize(out.sample_points.rows(), 3);
+  out.sample_normals << a.sample_normals, b.sample_normals;
+  out.sample_weights.resize(out.sample_points.rows());
+  out.sample_weights << a.sample_weights, b.sample_weights;
+  return out;
+}
+
+SurfaceFit fit_surface(SurfaceType type, const FitData& data, const FitOptions& options, const Surface* start) {
+  const MatrixX3d& points = data.points;
+  const Eigen::VectorXd& weights = data.weights;
+  SurfaceFit fit;
+  fit.surface.type = type;
+  const Eigen::Index count = points.rows();
+  const double total = weights.sum();
+  if (type == SurfaceType::Freeform || count < parameter_count(type) || !(total > 0.0)) return fit;
+
+  const Eigen::Vector3d centre = (points.transpose() * weights) / total;
+  const double scale = std::sqrt(((points.rowwise() - centre.transpose()).rowwise().squaredNorm().transpose() * weights)(0) / total);
+  if (!(scale > 0.0)) return fit;
+
+  Sample sample;
+  const Eigen::Index stride = std::max<Eigen::Index>(1, (count + options.max_points - 1) / options.max_points);
+  double sampled = 0.0;
+  for (Eigen::Index i = 0; i < count; i += stride) {
+    sample.p.push_back((points.row(i).transpose() - centre) / scale);
+    sample.w.push_back(weights[i]);
+    sampled += weights[i];
+  }
+  for (double& w : sample.w) w /= sampled;
+  const Eigen::Index samples = data.sample_points.rows();
+  const Eigen::Index sample_stride = std::max<Eigen::Index>(1, (samples + options.max_points - 1) / options.max_points);
+  double sample_total = 0.0;
+  for (Eigen::Index i = 0; i < samples; i += sample_stride) {
+    sample.q.push_back((data.sample_points.row(i).transpose() - centre) / scale);
+    sample.n.push_back(data.sample_normals.row(i).transpose());
+    sample.v.push_back(data.sample_weights[i]);
+    sample_total += data.sample_weights[i];
+  }
+  if (!(sample_total > 0.0)) return fit;
+  for (double& v : sample.v) v /= sample_total;
+
+  const Surface initial = start && start->type == type ? to_local(*start, centre, scale) : seed(type, sample);
+  if (!plausible(initial) || initial.type != type) return fit;
+  Surface refined = refine(initial, sample, sample.w, options.max_iterations);
+  if (options.robust) refined = refine(refined, sample, huber_weights(refined, sample), options.max_iterations);
+
+  double seed_rms, seed_max;
+  fit_residuals(to_world(initial, centre, scale), points, weights, seed_rms, seed_max);
+  fit.surface = to_world(refined, centre, scale);
+  fit_residuals(fit.surface, points, weights, fit.rms, fit.max_error);
+  if (!(fit.rms <= seed_rms)) {  // the refinement is kept only where it helps
+    fit.surface = to_world(initial, centre, scale);
+    fit.rms = seed_rms;
+    fit.max_error = seed_max;
+  }
+  fit.valid = plausible(fit.surface);
+  fit.normal_rms = normal_residual(fit.surface, data.sample_points, data.sample_normals, data.sample_weights);
+  robust_spreads(fit.surface, data, fit.spread, fit.normal_spread);
+  return fit;
+}
+
+}  // namespace idealize
