@@ -193,6 +193,12 @@ std::vector<char> reassign_faces(const TriangleMesh& mesh, const MeshTopology& t
     const int f = queue[head];
     const int p = labels[f];
     if (p < 0) continue;
+    bool rim = false;
+    for (int c = 0; c < 3 && !rim; ++c) {
+      const int g = topology.face_neighbor(f, c);
+      rim = g >= 0 && labels[g] >= 0 && labels[g] != p;
+    }
+    if (!rim) continue;
     int target = kNone;
     const double own = misfit(mesh, f, features[p], floor, normal_floor);
     // Noise alone rarely makes one surface four times better than another.
@@ -249,9 +255,9 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     if (rejected.count({a, b})) continue;  // neither changed since
     const Feature &fa = features[a], &fb = features[b];
     const PatchPoints &pa = points[a], &pb = points[b];
-    const bool small = std::min(pa.points.rows(), pb.points.rows()) < kInteriorPoints;
+    const bool a_small = pa.points.rows() < kInteriorPoints, b_small = pb.points.rows() < kInteriorPoints;
     const bool same_type = fa.type == fb.type && fa.type != SurfaceType::Freeform;
-    if (!same_type && !small) continue;
+    if (!same_type && !a_small && !b_small) continue;
     const PatchPoints both = concatenate(pa, pb);
     const Feature& larger = pa.weights.sum() >= pb.weights.sum() ? fa : fb;
     const double limit = options.residual_ratio * std::max(fa.rms, fb.rms) + tolerance;
@@ -259,16 +265,18 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     auto accepted = [&](const Feature& u) {
       return u.type != SurfaceType::Freeform && u.rms <= limit && u.normal_rms <= normal_limit;
     };
+    // A small piece joins its neighbour's surface; two small pieces may make a new one.
     Feature merged = larger;
     bool ok = false;
-    if (same_type) {
+    const bool larger_small = &larger == &fa ? a_small : b_small;
+    if ((same_type || !larger_small) && larger.type != SurfaceType::Freeform) {
       const SurfaceFit fit = fit_surface(larger.type, both, options.fit, &larger.surface);
       if (fit.valid) {
         set_fit(merged, fit);
         ok = accepted(merged);
       }
     }
-    if (!ok && small) {
+    if (!ok && a_small && b_small) {
       merged = identify_points(both, larger.curvature);
       ok = accepted(merged);
     }
@@ -496,6 +504,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   };
   std::vector<PatchPoints> points = patch_points(mesh, layer.labels, num_patches);
   identify_all(points, std::vector<char>(num_patches, 1));
+  stage("fit");
 
   // Split what no surface fits, into planar regions that merging below joins again where one
   // surface fits them together. Only on exact tessellations (the typical patch fits to a hundredth
@@ -537,28 +546,39 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     }
   }
   const int patches = static_cast<int>(layer.features.size());
+  stage("split");
 
   // Move rim faces to the neighbour that explains them, refine the surfaces of the patches that
   // changed (same type, starting from the previous fit), and finally identify those afresh. Runs
   // again after merging, which brings surfaces that explain more of their neighbours' rims.
+  auto triangle_counts = [&] {
+    std::vector<int> count(patches, 0);
+    for (int l : layer.labels)
+      if (l >= 0) ++count[l];
+    return count;
+  };
   auto reassign = [&] {
-    std::vector<char> ever_changed(patches, 0);
+    const std::vector<int> before = triangle_counts();
     for (int round = 0; round < options.reassignment_rounds; ++round) {
       const std::vector<char> changed = reassign_faces(mesh, topology, layer.features, options, floor, layer.labels);
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
       points = patch_points(mesh, layer.labels, patches);
       for (int p = 0; p < patches; ++p) {
-        if (!changed[p]) continue;
-        ever_changed[p] = 1;
         Feature& f = layer.features[p];
-        if (f.type == SurfaceType::Freeform) continue;
+        if (!changed[p] || f.type == SurfaceType::Freeform) continue;
         const SurfaceFit fit = fit_surface(f.type, points[p], options.fit, &f.surface);
         if (fit.valid) set_fit(f, fit);
       }
     }
-    identify_all(points, ever_changed);
+    // A patch that lost or gained a good part of its faces may be of another type now (the rim of
+    // a scan's patch changes by a few percent; a coarse CAD patch may lose half of its facets).
+    const std::vector<int> after = triangle_counts();
+    std::vector<char> reidentify(patches, 0);
+    for (int p = 0; p < patches; ++p) reidentify[p] = std::abs(after[p] - before[p]) > before[p] / 4;
+    identify_all(points, reidentify);
   };
   reassign();
+  stage("reassign");
   std::set<std::pair<int, int>> rejected;
   for (int pass = 0; pass < options.merge_passes; ++pass) {
     if (!merge_patches(mesh, topology, points, identify_points, options, layer.distance_tolerance, layer.features,
@@ -566,7 +586,9 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       break;
     points = patch_points(mesh, layer.labels, patches);
   }
+  stage("merge");
   reassign();
+  stage("reassign_after_merge");
   undo_inexact_splits(mesh, labels, was_split, kExactFraction * layer.distance_tolerance, identify_points, curvature,
                       layer.features, layer.labels);
   compact_features(layer.labels, layer.features);
@@ -591,7 +613,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     if (f.spread > options.freeform_ratio * typical && f.spread > layer.distance_tolerance &&
         f.spread > options.freeform_relative_size * std::sqrt(f.area))
       f.type = SurfaceType::Freeform;
-  stage("identify");
+  stage("classify");
 
   build_feature_graph(mesh, topology, layer.labels, layer.features, options.angle_tolerance_degrees * M_PI / 180.0,
                       layer.distance_tolerance, layer.adjacency, layer.relations);

@@ -363,32 +363,30 @@ double weighted_median(std::vector<std::pair<double, double>>& values) {  // (va
   return values.empty() ? 0.0 : values.back().first;
 }
 
-// Robust spreads of the distances of the points and the normal angles of the samples.
-void robust_spreads(const Surface& surface, const FitData& data, double& spread, double& normal_spread) {
-  std::vector<std::pair<double, double>> distance(data.points.rows()), angle(data.sample_points.rows());
-  for (Eigen::Index i = 0; i < data.points.rows(); ++i)
-    distance[i] = {std::abs(signed_distance(surface, data.points.row(i).transpose())), data.weights[i]};
-  for (Eigen::Index i = 0; i < data.sample_points.rows(); ++i) {
-    const double c = std::abs(surface_normal(surface, data.sample_points.row(i).transpose()).dot(data.sample_normals.row(i).transpose()));
-    angle[i] = {std::acos(std::min(c, 1.0)), data.sample_weights[i]};
+// The normal RMS angle and the robust spreads of a fit, on an even subsample of at most
+// kStatisticsPoints points and samples: medians and means of that many are as good as of all.
+constexpr Eigen::Index kStatisticsPoints = 2000;
+
+void fit_statistics(const FitData& data, SurfaceFit& fit) {
+  const Eigen::Index point_stride = std::max<Eigen::Index>(1, data.points.rows() / kStatisticsPoints);
+  const Eigen::Index sample_stride = std::max<Eigen::Index>(1, data.sample_points.rows() / kStatisticsPoints);
+  std::vector<std::pair<double, double>> distance, angle;
+  for (Eigen::Index i = 0; i < data.points.rows(); i += point_stride)
+    distance.emplace_back(std::abs(signed_distance(fit.surface, data.points.row(i).transpose())), data.weights[i]);
+  double sum = 0.0, total = 0.0;
+  for (Eigen::Index i = 0; i < data.sample_points.rows(); i += sample_stride) {
+    const Eigen::Vector3d n = surface_normal(fit.surface, data.sample_points.row(i).transpose());
+    const double a = std::acos(std::min(std::abs(n.dot(data.sample_normals.row(i).transpose())), 1.0));
+    angle.emplace_back(a, data.sample_weights[i]);
+    sum += data.sample_weights[i] * a * a;
+    total += data.sample_weights[i];
   }
-  spread = 1.4826 * weighted_median(distance);
-  normal_spread = 1.4826 * weighted_median(angle);
+  fit.normal_rms = total > 0.0 ? std::sqrt(sum / total) : 0.0;
+  fit.spread = 1.4826 * weighted_median(distance);
+  fit.normal_spread = 1.4826 * weighted_median(angle);
 }
 
 }  // namespace
-
-double normal_residual(const Surface& surface, const MatrixX3d& points, const MatrixX3d& normals,
-                       const Eigen::VectorXd& weights) {
-  double sum = 0.0, total = 0.0;
-  for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    const double c = std::abs(surface_normal(surface, points.row(i).transpose()).dot(normals.row(i).transpose()));
-    const double angle = std::acos(std::min(c, 1.0));
-    sum += weights[i] * angle * angle;
-    total += weights[i];
-  }
-  return total > 0.0 ? std::sqrt(sum / total) : 0.0;
-}
 
 FitData concatenate(const FitData& a, const FitData& b) {
   FitData out;
@@ -444,18 +442,13 @@ SurfaceFit fit_surface(SurfaceType type, const FitData& data, const FitOptions& 
   Surface refined = refine(initial, sample, sample.w, options.max_iterations);
   if (options.robust) refined = refine(refined, sample, huber_weights(refined, sample), options.max_iterations);
 
-  double seed_rms, seed_max;
-  fit_residuals(to_world(initial, centre, scale), points, weights, seed_rms, seed_max);
-  fit.surface = to_world(refined, centre, scale);
+  // The refinement is kept only where it lowers the residual (on the points it saw).
+  std::vector<double> d(sample.p.size());
+  const bool better = cost(refined, sample, sample.w, d) <= cost(initial, sample, sample.w, d);
+  fit.surface = to_world(better ? refined : initial, centre, scale);
   fit_residuals(fit.surface, points, weights, fit.rms, fit.max_error);
-  if (!(fit.rms <= seed_rms)) {  // the refinement is kept only where it helps
-    fit.surface = to_world(initial, centre, scale);
-    fit.rms = seed_rms;
-    fit.max_error = seed_max;
-  }
   fit.valid = plausible(fit.surface);
-  fit.normal_rms = normal_residual(fit.surface, data.sample_points, data.sample_normals, data.sample_weights);
-  robust_spreads(fit.surface, data, fit.spread, fit.normal_spread);
+  fit_statistics(data, fit);
   return fit;
 }
 

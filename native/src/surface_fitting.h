@@ -59,9 +59,4 @@ SurfaceFit fit_surface(SurfaceType type, const FitData& data, const FitOptions& 
 void fit_residuals(const Surface& surface, const MatrixX3d& points, const Eigen::VectorXd& weights,
                    double& rms, double& max_error);
 
-// Weighted RMS angle (radians) between unit `normals` and the surface's normals at `points`,
-// whichever way either is oriented.
-double normal_residual(const Surface& surface, const MatrixX3d& points, const MatrixX3d& normals,
-                       const Eigen::VectorXd& weights);
-
 }  // namespace idealize
