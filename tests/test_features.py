@@ -380,3 +380,37 @@ def test_single_wavy_patch_is_freeform():
     [feature] = result["features"]
     # No analytic type fits: the best (a plane) misses by ~0.037, 13 x the distance tolerance.
     assert feature["type"] == "freeform", (feature["type"], feature["rms"], result["distance_tolerance"])
+
+
+@needs_freecad
+def test_idealization_makes_relations_exact(noisy_scan):
+    """On the noisy scan the fitted fillets differ by noise; idealized, they share one radius and
+    their axes are exactly the top plane's normal (thesis 4.3: equal radius, snapping to the frame)."""
+    _, _, _, diag, layer = noisy_scan
+    fillets = [f for f in layer.features if f["type"] == "cylinder" and f["params"]["radius"] < 6]
+    assert len(fillets) == 4
+    radii = {f["params"]["radius"] for f in fillets}
+    assert len(radii) == 1 and abs(radii.pop() / 5 - 1) < 0.02
+    assert {"kind": "equal_radius", "features": sorted(f["id"] for f in fillets)} in layer.relations
+    top = max((f for f in layer.features if f["type"] == "plane"), key=lambda f: f["area"])
+    for f in fillets:
+        assert abs(abs(np.dot(f["params"]["axis"], top["params"]["normal"])) - 1) < 1e-12
+    # Idealized surfaces still describe the mesh: the deviation stays at the noise level.
+    assert layer.deviation["rms"] < 2e-3 * diag
+
+
+@needs_freecad
+def test_idealization_keeps_a_direction_that_is_only_nearly_ideal():
+    """A CAD face tilted 3° from vertical is within the 5° snapping tolerance, but snapping it would
+    move the exact face away from its vertices: the fitted direction stays."""
+    FreeCAD, Part, _ = shapes.freecad()
+    wedge = Part.makeBox(40, 30, 20)
+    cut = Part.makeBox(40, 30, 30, FreeCAD.Vector(40, -1, -5))
+    cut.rotate(FreeCAD.Vector(40, 0, 0), FreeCAD.Vector(0, 1, 0), -3)
+    solid = wedge.cut(cut)
+    V, F, gt, layer = layer_of(solid)
+    tilted = [f for f in layer.features if f["type"] == "plane"
+              and 1.0 < np.degrees(axis_angle(f["params"]["normal"], [1, 0, 0])) < 5.0]
+    assert len(tilted) == 1
+    assert abs(np.degrees(axis_angle(tilted[0]["params"]["normal"], [1, 0, 0])) - 3.0) < 1e-3
+    assert layer.deviation["max"] < 1e-6 * np.linalg.norm(V.max(0) - V.min(0)) * 10

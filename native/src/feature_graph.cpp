@@ -92,7 +92,8 @@ double tube_radius(const Feature& f) { return f.type == SurfaceType::Torus ? f.s
 
 void build_feature_graph(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
                          const std::vector<Feature>& features, double angle_tolerance, double distance_tolerance,
-                         std::vector<FeatureAdjacency>& adjacency, std::vector<FeatureRelation>& relations) {
+                         double radius_tolerance, std::vector<FeatureAdjacency>& adjacency,
+                         std::vector<FeatureRelation>& relations) {
   find_adjacency(mesh, topology, labels, features, angle_tolerance, adjacency);
   relations.clear();
   const double cos_tolerance = std::cos(angle_tolerance), sin_tolerance = std::sin(angle_tolerance);
@@ -123,7 +124,8 @@ void build_feature_graph(const TriangleMesh& mesh, const MeshTopology& topology,
                }), relations);
   }
   add_groups("equal_radius", cluster(radial, features, [&](int x, int y) {
-               return std::abs(tube_radius(features[x]) - tube_radius(features[y])) <= distance_tolerance;
+               const double rx = tube_radius(features[x]), ry = tube_radius(features[y]);
+               return std::abs(rx - ry) <= std::max(distance_tolerance, radius_tolerance * std::max(rx, ry));
              }), relations);
   add_groups("concentric", cluster(centred, features, [&](int x, int y) {
                return (features[x].surface.point - features[y].surface.point).norm() <= distance_tolerance;

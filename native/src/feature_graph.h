@@ -11,9 +11,11 @@ namespace idealize {
 //     (directions are plane normals and axes; radii are those of cylinders and spheres and the
 //     tube radius of tori, so a fillet's radius compares with the holes');
 //   perpendicular, tangent: pairs of adjacent features.
-// `angle_tolerance` in radians, `distance_tolerance` in model units.
+// `angle_tolerance` in radians, `distance_tolerance` in model units; radii are equal within the
+// larger of the distance tolerance and `radius_tolerance` times the radius.
 void build_feature_graph(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
                          const std::vector<Feature>& features, double angle_tolerance, double distance_tolerance,
-                         std::vector<FeatureAdjacency>& adjacency, std::vector<FeatureRelation>& relations);
+                         double radius_tolerance, std::vector<FeatureAdjacency>& adjacency,
+                         std::vector<FeatureRelation>& relations);
 
 }  // namespace idealize

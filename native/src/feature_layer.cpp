@@ -1,6 +1,7 @@
 #include "feature_layer.h"
 
 #include "feature_graph.h"
+#include "idealization.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -615,9 +616,32 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       f.type = SurfaceType::Freeform;
   stage("classify");
 
-  build_feature_graph(mesh, topology, layer.labels, layer.features, options.angle_tolerance_degrees * M_PI / 180.0,
-                      layer.distance_tolerance, layer.adjacency, layer.relations);
+  const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
+  build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
+                      options.radius_tolerance, layer.adjacency, layer.relations);
   stage("relations");
+  if (options.idealize) {
+    IdealizationOptions ideal;
+    ideal.angle_tolerance_degrees = options.angle_tolerance_degrees;
+    ideal.distance_tolerance = layer.distance_tolerance;
+    const std::vector<Feature> fitted = layer.features;
+    if (idealize_features(layer.features, layer.relations, ideal) > 0) {
+      // An ideal surface must still describe its patch: where it fits clearly worse than the fitted
+      // one (a direction that only looked ideal, radii that only looked equal), the fit stays.
+      points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+      for (size_t p = 0; p < layer.features.size(); ++p) {
+        Feature& f = layer.features[p];
+        if (f.type == SurfaceType::Freeform) continue;
+        double rms, max_error;
+        fit_residuals(f.surface, points[p].points, points[p].weights, rms, max_error);
+        const double allowed = options.residual_ratio * fitted[p].rms + fitted[p].spread + floor;  // + one σ of noise
+        if (rms > allowed) f = fitted[p];
+      }
+      build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
+                          options.radius_tolerance, layer.adjacency, layer.relations);  // the graph of the ideal surfaces
+    }
+    stage("idealize");
+  }
   project_vertices(mesh, topology, layer.labels, layer.features, layer.distance_tolerance, layer);
   stage("projection");
   return layer;

@@ -30,6 +30,9 @@ struct FeatureOptions {
   // Axes, centres, radii and plane offsets closer than this are equal; 0 derives it from the data
   // as 0.1 % of the bounding-box diagonal (the thesis: 0.1 mm on parts of about 100 mm).
   double distance_tolerance = 0.0;
+  // Radii within this fraction of each other are one design radius: a fillet's radius fitted to a
+  // scan's quarter arc is off by 1-3 % (the thesis snaps radii to the peaks of the k_max histogram).
+  double radius_tolerance = 0.05;
   // A surface type is accepted when its residual (robust spread) is at most this many times the
   // best type's:
   // two types that both describe the patch differ by the noise only, a wrong type's residual grows
@@ -52,6 +55,9 @@ struct FeatureOptions {
   // Passes of merging adjacent patches that one surface fits together (each patch merges at most
   // once per pass).
   int merge_passes = 8;
+  // Make the relations exact and snap axes to the part's ideal directions (idealization.h) before
+  // the mesh is projected.
+  bool idealize = true;
 };
 
 // The curvature statistics of one patch that identification reads (area-weighted means).

@@ -1,0 +1,161 @@
+#include "idealization.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace idealize {
+
+namespace {
+
+Eigen::Vector3d aligned(const Eigen::Vector3d& d, const Eigen::Vector3d& reference) {
+  return d.dot(reference) < 0.0 ? Eigen::Vector3d(-d) : d;
+}
+
+bool analytic(const Feature& f) { return f.type != SurfaceType::Freeform; }
+
+int largest(const std::vector<int>& group, const std::vector<Feature>& features) {
+  int best = group.front();
+  for (int m : group)
+    if (features[m].area > features[best].area) best = m;
+  return best;
+}
+
+// Area-weighted mean direction of a group, signs aligned with its largest member.
+Eigen::Vector3d mean_direction(const std::vector<int>& group, const std::vector<Feature>& features) {
+  const Eigen::Vector3d reference = features[largest(group, features)].surface.axis;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int m : group) sum += features[m].area * aligned(features[m].surface.axis, reference);
+  return sum.norm() > 0.0 ? Eigen::Vector3d(sum.normalized()) : reference;
+}
+
+struct Frame {
+  Eigen::Vector3d x, y, z;
+};
+
+// Z: the normal of the largest plane; X: the largest feature direction orthogonal to it.
+bool part_frame(const std::vector<Feature>& features, double sin_tolerance, Frame& frame) {
+  int plane = -1;
+  for (const Feature& f : features)
+    if (f.type == SurfaceType::Plane && (plane < 0 || f.area > features[plane].area)) plane = f.id;
+  if (plane < 0) return false;
+  frame.z = features[plane].surface.axis;
+  int second = -1;
+  for (const Feature& f : features)
+    if (analytic(f) && f.surface.has_direction() && std::abs(f.surface.axis.dot(frame.z)) <= sin_tolerance &&
+        (second < 0 || f.area > features[second].area))
+      second = f.id;
+  if (second >= 0) {
+    const Eigen::Vector3d d = features[second].surface.axis;
+    frame.x = (d - d.dot(frame.z) * frame.z).normalized();
+    frame.y = frame.z.cross(frame.x);
+  } else {
+    orthonormal_frame(frame.z, frame.x, frame.y);
+  }
+  return true;
+}
+
+// Directions in the coordinate planes of the frame at the thesis's ideal angles from its axes.
+std::vector<Eigen::Vector3d> ideal_directions(const Frame& frame) {
+  constexpr std::array<double, 12> kDegrees = {0, 10, 30, 45, 60, 80, 90, 100, 120, 135, 150, 170};
+  const std::array<std::pair<Eigen::Vector3d, Eigen::Vector3d>, 3> planes = {
+      std::make_pair(frame.x, frame.y), std::make_pair(frame.y, frame.z), std::make_pair(frame.z, frame.x)};
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& [a, b] : planes)
+    for (double degrees : kDegrees) {
+      const double t = degrees * M_PI / 180.0;
+      out.push_back(std::cos(t) * a + std::sin(t) * b);
+    }
+  return out;
+}
+
+Eigen::Vector3d snapped(const Eigen::Vector3d& d, const std::vector<Eigen::Vector3d>& ideals, double cos_tolerance) {
+  const Eigen::Vector3d* best = nullptr;
+  double best_cos = cos_tolerance;
+  for (const Eigen::Vector3d& i : ideals)
+    if (std::abs(i.dot(d)) >= best_cos) {
+      best_cos = std::abs(i.dot(d));
+      best = &i;
+    }
+  return best ? aligned(*best, d) : d;
+}
+
+double& tube_radius(Feature& f) { return f.type == SurfaceType::Torus ? f.surface.minor : f.surface.radius; }
+
+}  // namespace
+
+int idealize_features(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
+                      const IdealizationOptions& options) {
+  const std::vector<Feature> before = features;
+  const double angle = options.angle_tolerance_degrees * M_PI / 180.0;
+  const double cos_tolerance = std::cos(angle);
+
+  // 1. Directions: parallel groups share their mean direction, then every direction snaps to the
+  // part's ideal directions.
+  for (const FeatureRelation& r : relations)
+    if (r.kind == "parallel") {
+      const Eigen::Vector3d d = mean_direction(r.features, features);
+      for (int m : r.features) features[m].surface.axis = aligned(d, features[m].surface.axis);
+    }
+  Frame frame;
+  if (options.snap_to_frame && part_frame(features, std::sin(angle), frame)) {
+    const std::vector<Eigen::Vector3d> ideals = ideal_directions(frame);
+    for (Feature& f : features)
+      if (analytic(f) && f.surface.has_direction()) f.surface.axis = snapped(f.surface.axis, ideals, cos_tolerance);
+  }
+
+  for (const FeatureRelation& r : relations) {
+    const std::vector<int>& group = r.features;
+    double area = 0.0;
+    for (int m : group) area += features[m].area;
+    if (!(area > 0.0)) continue;
+    if (r.kind == "coplanar") {  // 2. one offset along the shared normal
+      const Eigen::Vector3d n = features[largest(group, features)].surface.axis;
+      double offset = 0.0;
+      for (int m : group) offset += features[m].area * n.dot(features[m].surface.point) / area;
+      for (int m : group) {
+        Surface& s = features[m].surface;
+        s.axis = aligned(n, s.axis);
+        s.point -= (n.dot(s.point) - offset) * n;
+      }
+    } else if (r.kind == "coaxial") {  // 3. one axis line; members keep their place along it
+      const Eigen::Vector3d a = features[largest(group, features)].surface.axis;
+      Eigen::Vector3d across = Eigen::Vector3d::Zero();
+      for (int m : group) {
+        const Eigen::Vector3d& p = features[m].surface.point;
+        across += features[m].area * (p - p.dot(a) * a) / area;
+      }
+      for (int m : group) {
+        Surface& s = features[m].surface;
+        s.axis = aligned(a, s.axis);
+        s.point = across + s.point.dot(a) * a;
+      }
+    } else if (r.kind == "equal_radius") {  // 4. one radius: the area-weighted median, blind to a poor fit
+      std::vector<std::pair<double, double>> radii;
+      for (int m : group) radii.emplace_back(tube_radius(features[m]), features[m].area);
+      std::sort(radii.begin(), radii.end());
+      double running = 0.0, radius = radii.back().first;
+      for (const auto& [value, weight] : radii)
+        if ((running += weight) >= 0.5 * area) {
+          radius = value;
+          break;
+        }
+      for (int m : group) tube_radius(features[m]) = radius;
+    } else if (r.kind == "concentric") {  // 5. one centre
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+      for (int m : group) centre += features[m].area * features[m].surface.point / area;
+      for (int m : group) features[m].surface.point = centre;
+    }
+  }
+
+  int changed = 0;
+  for (size_t i = 0; i < features.size(); ++i) {
+    const Surface &a = before[i].surface, &b = features[i].surface;
+    changed += a.point != b.point || a.axis != b.axis || a.radius != b.radius || a.minor != b.minor;
+  }
+  return changed;
+}
+
+}  // namespace idealize

@@ -1,0 +1,29 @@
+// Idealization of the feature table (thesis 4.3, part 1 and the relation-driven steps of part 2):
+// the features' surfaces are made exactly parallel, perpendicular, coaxial, coplanar and of equal
+// radius where the feature graph says they nearly are, and axes are snapped to the ideal
+// directions of the part's own frame.
+//
+// The frame: the normal of the largest plane is Z; the largest feature whose direction is
+// orthogonal to it (within the angle tolerance) gives X. A direction within the angle tolerance of
+// a direction in a coordinate plane of that frame at 0, 10, 30, 45, 60 or 90 degrees (and their
+// supplements) from a frame axis snaps to it. No constraint solver: groups are made consistent one
+// relation kind at a time, in the order a designer fixes them (directions, then positions, then
+// sizes), so an answer always exists.
+#pragma once
+
+#include "feature_layer.h"
+
+namespace idealize {
+
+struct IdealizationOptions {
+  double angle_tolerance_degrees = 5.0;  // the thesis's alignment tolerance
+  double distance_tolerance = 0.0;       // model units; must be set (the layer's tolerance)
+  bool snap_to_frame = true;             // snap directions to the part's ideal directions
+};
+
+// Idealizes `features` in place using `relations` (from build_feature_graph). Freeform features
+// are left alone. Returns the number of features whose surface changed.
+int idealize_features(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
+                      const IdealizationOptions& options);
+
+}  // namespace idealize
