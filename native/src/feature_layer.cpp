@@ -310,10 +310,13 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
 // Splits a patch that no surface fits (the segmentation merged faces across an edge it did not
 // resolve) into planar regions grown from its largest faces: a face joins while its vertices lie
 // within 3 σ of the region's plane and its normal within 3 σ of the plane's, σ being the noise of
-// the mesh's well-fitted patches. Curved parts fall apart into planar strips that merging joins
-// again. The first region keeps the patch's id, the others get new ids from `next_id` on.
+// the mesh's well-fitted patches. Regions of fewer than `min_region_faces` faces go back to a
+// remainder whose connected components become patches of their own: on a noisy mesh a curved face
+// stays whole that way, while on an exact tessellation (min_region_faces = 1) curved parts fall
+// apart into planar facets that merging joins again. The first region keeps the patch's id, the
+// others get new ids from `next_id` on.
 int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
-                double normal_noise, std::vector<int>& labels, int next_id) {
+                double normal_noise, int min_region_faces, std::vector<int>& labels, int next_id) {
   std::vector<int> faces;
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (labels[f] == patch) faces.push_back(f);
@@ -323,18 +326,21 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, int patc
     const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
     return Eigen::Vector3d((b - a).cross(c - a).normalized());
   };
-  std::vector<char> open(mesh.num_faces(), 0);
-  for (int f : faces) open[f] = 1;
+  // State of each face of the patch: not yet reached, grown into a region that turned out too small
+  // (it goes to the remainder), in a kept region, or gathered into a remainder component.
+  enum : char { kOutside, kUnvisited, kGrown, kKept, kRemainder };
+  std::vector<char> open(mesh.num_faces(), kOutside);
+  for (int f : faces) open[f] = kUnvisited;
   const double cos_limit = std::cos(std::min(3.0 * normal_noise, 0.5 * M_PI));
   bool first = true;
   for (int seed : faces) {
-    if (!open[seed]) continue;
+    if (open[seed] != kUnvisited) continue;
     Surface plane;
     plane.type = SurfaceType::Plane;
     plane.axis = normal_of(seed);
     plane.point = (mesh.V.row(mesh.F(seed, 0)) + mesh.V.row(mesh.F(seed, 1)) + mesh.V.row(mesh.F(seed, 2))).transpose() / 3.0;
     std::vector<int> region{seed}, queue{seed};
-    open[seed] = 0;
+    open[seed] = kGrown;
     size_t fitted = 1;
     Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -352,12 +358,12 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, int patc
       const int f = queue[head];
       for (int c = 0; c < 3; ++c) {
         const int g = topology.face_neighbor(f, c);
-        if (g < 0 || !open[g] || std::abs(normal_of(g).dot(plane.axis)) < cos_limit) continue;
+        if (g < 0 || open[g] != kUnvisited || std::abs(normal_of(g).dot(plane.axis)) < cos_limit) continue;
         bool near = true;
         for (int k = 0; k < 3 && near; ++k)
           near = std::abs(signed_distance(plane, mesh.V.row(mesh.F(g, k)).transpose())) <= 3.0 * noise;
         if (!near) continue;
-        open[g] = 0;
+        open[g] = kGrown;
         region.push_back(g);
         queue.push_back(g);
         accumulate(g);
@@ -372,9 +378,44 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, int patc
         }
       }
     }
+    if (static_cast<int>(region.size()) < min_region_faces) continue;  // stays open: remainder
     const int id = first ? patch : next_id++;
     first = false;
     for (int f : region) labels[f] = id;
+    for (int f : region) open[f] = kKept;
+  }
+  // The remainder (faces no kept region took) in connected components: a component too small to
+  // be a face of its own joins the kept region it borders most.
+  for (int seed : faces) {
+    if (open[seed] == kKept || open[seed] == kRemainder || labels[seed] != patch) continue;
+    std::vector<int> component{seed};
+    open[seed] = kRemainder;
+    std::vector<std::pair<int, int>> borders;  // (region id, shared edges)
+    for (size_t head = 0; head < component.size(); ++head) {
+      const int f = component[head];
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(f, c);
+        if (g < 0) continue;
+        if (open[g] == kKept) {  // a kept region
+          auto it = std::find_if(borders.begin(), borders.end(), [&](const auto& b) { return b.first == labels[g]; });
+          if (it == borders.end()) borders.emplace_back(labels[g], 1);
+          else ++it->second;
+        } else if (labels[g] == patch && (open[g] == kUnvisited || open[g] == kGrown)) {
+          open[g] = kRemainder;
+          component.push_back(g);
+        }
+      }
+    }
+    int id;
+    if (static_cast<int>(component.size()) < kInteriorPoints && !borders.empty()) {
+      id = std::max_element(borders.begin(), borders.end(), [](const auto& x, const auto& y) {
+             return x.second != y.second ? x.second < y.second : x.first > y.first;
+           })->first;
+    } else {
+      id = first ? patch : next_id++;
+      first = false;
+    }
+    for (int f : component) labels[f] = id;
   }
   return next_id;
 }
@@ -391,13 +432,13 @@ void undo_inexact_splits(const TriangleMesh& mesh, const std::vector<int>& origi
   std::vector<double> total(was_split.size(), 0.0), fragmented(was_split.size(), 0.0);
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const int o = original[f], l = labels[f];
-    if (o < 0 || !was_split[o] || l < 0) continue;
+    if (o < 0 || was_split[o] != 1 || l < 0) continue;
     total[o] += area[f];
     if (features[l].type == SurfaceType::Freeform || features[l].rms > exact) fragmented[o] += area[f];
   }
   std::vector<char> undo(was_split.size(), 0);
   bool any = false;
-  for (size_t o = 0; o < was_split.size(); ++o) any |= undo[o] = was_split[o] && fragmented[o] > 0.5 * total[o];
+  for (size_t o = 0; o < was_split.size(); ++o) any |= undo[o] = was_split[o] == 1 && fragmented[o] > 0.5 * total[o];
   if (!any) return;
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (original[f] >= 0 && undo[original[f]]) labels[f] = original[f];
@@ -494,7 +535,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   const MeshTopology topology(mesh);
   layer.labels = labels;
   std::vector<PatchCurvature> curvature = patch_curvature;  // grows with split patches
-  std::vector<char> was_split(num_patches, 0);
+  std::vector<char> was_split(num_patches, 0);  // 1: split as an exact tessellation, 2: as a noisy mesh
   auto identify_points = [&](const PatchPoints& pp, const PatchCurvature& c) {
     return identify(pp, c, zero_mean_curvature, options, layer.distance_tolerance);
   };
@@ -507,10 +548,10 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   identify_all(points, std::vector<char>(num_patches, 1));
   stage("fit");
 
-  // Split what no surface fits, into planar regions that merging below joins again where one
-  // surface fits them together. Only on exact tessellations (the typical patch fits to a hundredth
-  // of the tolerance, as the vertices of a CAD export lie on their faces): under scan noise, planar
-  // growing breaks curved faces into strips too noisy to join again.
+  // Split what no surface fits into planar regions (and, on noisy meshes, the connected rest);
+  // merging below joins pieces again where one surface fits them together. On exact
+  // tessellations (the typical patch fits to a hundredth of the tolerance, as the vertices of a CAD
+  // export lie on their faces) every planar facet is kept as a piece.
   {
     std::vector<double> rms, normal_rms;
     for (const Feature& f : layer.features)
@@ -518,17 +559,19 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         rms.push_back(f.spread);
         normal_rms.push_back(f.normal_spread);
       }
-    if (!rms.empty()) std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
-    if (!rms.empty() && rms[rms.size() / 2] < kExactFraction * layer.distance_tolerance) {
+    if (!rms.empty()) {
+      std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
       std::nth_element(normal_rms.begin(), normal_rms.begin() + normal_rms.size() / 2, normal_rms.end());
+      const bool exact = rms[rms.size() / 2] < kExactFraction * layer.distance_tolerance;
       const double noise = rms[rms.size() / 2] + floor;
       const double normal_noise = normal_rms[normal_rms.size() / 2] + options.normal_floor_degrees * M_PI / 180.0;
       int next_id = num_patches;
       for (int p = 0; p < num_patches; ++p) {
         const Feature& f = layer.features[p];
         if (f.type == SurfaceType::Freeform || f.rms > options.freeform_ratio * noise + layer.distance_tolerance) {
-          next_id = split_patch(mesh, topology, p, noise, normal_noise, layer.labels, next_id);
-          was_split[p] = 1;
+          next_id = split_patch(mesh, topology, p, noise, normal_noise, exact ? 1 : 2 * kInteriorPoints, layer.labels,
+                                next_id);
+          was_split[p] = exact ? 1 : 2;
         }
       }
       if (next_id > num_patches) {
