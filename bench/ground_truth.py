@@ -156,3 +156,47 @@ def relation_pairs(relation_list: List[Dict]) -> Dict[str, Set[Pair]]:
         members = sorted(r["features"])
         out.setdefault(r["kind"], set()).update(itertools.combinations(members, 2))
     return out
+
+
+def same_surface(a: Dict, b: Dict, diag: float) -> bool:
+    """Whether two faces lie on one surface (a STEP file often splits a periodic face in two)."""
+    if a["type"] != b["type"] or a["type"] == "freeform":
+        return False
+    distance = EXACT_DISTANCE * diag
+    pa, pb = a["params"], b["params"]
+    for key in ("radius", "major", "minor"):
+        if key in pa and abs(pa[key] - pb[key]) > distance:
+            return False
+    if "half_angle" in pa and abs(pa["half_angle"] - pb["half_angle"]) > math.radians(EXACT_DEGREES):
+        return False
+    if a["type"] == "sphere":
+        return np.linalg.norm(np.subtract(pa["center"], pb["center"])) <= distance
+    da, db = _direction(a), _direction(b)
+    if abs(float(np.dot(da, db))) < math.cos(math.radians(EXACT_DEGREES)):
+        return False
+    offset = _anchor(b) - _anchor(a)
+    if a["type"] == "plane":
+        return abs(float(np.dot(offset, da))) <= distance
+    if a["type"] == "cone":
+        return np.linalg.norm(offset) <= distance  # same apex
+    across = offset - np.dot(offset, da) * da
+    return np.linalg.norm(across) <= distance and (a["type"] != "torus" or abs(float(np.dot(offset, da))) <= distance)
+
+
+def surface_of_face(gt_info: Dict) -> np.ndarray:
+    """For every B-rep face, the smallest index of the faces it is joined to through edges shared
+    with faces on the same surface: one id per geometric surface patch."""
+    faces = gt_info["faces"]
+    parent = list(range(len(faces)))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for e in gt_info["adjacency"]:
+        if same_surface(faces[e["a"]], faces[e["b"]], gt_info["diag"]):
+            ra, rb = root(e["a"]), root(e["b"])
+            parent[max(ra, rb)] = min(ra, rb)
+    return np.array([root(i) for i in range(len(faces))], dtype=np.int64)
