@@ -261,7 +261,7 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     if (!same_type && !a_small && !b_small) continue;
     const PatchPoints both = concatenate(pa, pb);
     const Feature& larger = pa.weights.sum() >= pb.weights.sum() ? fa : fb;
-    const double limit = options.residual_ratio * std::max(fa.rms, fb.rms) + tolerance;
+    const double limit = options.residual_ratio * std::max(fa.rms, fb.rms) + kExactFraction * tolerance;
     const double normal_limit = options.residual_ratio * std::max(fa.normal_rms, fb.normal_rms) + normal_floor;
     auto accepted = [&](const Feature& u) {
       return u.type != SurfaceType::Freeform && u.rms <= limit && u.normal_rms <= normal_limit;
@@ -420,21 +420,24 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, int patc
   return next_id;
 }
 
-// Splitting runs on exact tessellations only, where faces that the segmentation merged come apart
-// into pieces that their surfaces fit exactly. Where most of a patch ended in pieces that fit only
-// approximately (to more than `exact` RMS), it was a freeform surface: the split is undone and the
-// patch identified afresh.
+// On an exact tessellation, faces that the segmentation merged come apart into pieces that their
+// surfaces fit exactly. Where most of a split patch ended in pieces that fit only approximately (to
+// more than `exact` RMS) or in single triangles (which any plane fits), it was a freeform surface:
+// the split is undone and the patch identified afresh.
 void undo_inexact_splits(const TriangleMesh& mesh, const std::vector<int>& original, const std::vector<char>& was_split,
                          double exact, const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
                          const std::vector<PatchCurvature>& curvature, std::vector<Feature>& features,
                          std::vector<int>& labels) {
   const Eigen::VectorXd area = face_areas(mesh);
+  std::vector<int> triangles(features.size(), 0);
+  for (int l : labels)
+    if (l >= 0) ++triangles[l];
   std::vector<double> total(was_split.size(), 0.0), fragmented(was_split.size(), 0.0);
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const int o = original[f], l = labels[f];
     if (o < 0 || was_split[o] != 1 || l < 0) continue;
     total[o] += area[f];
-    if (features[l].type == SurfaceType::Freeform || features[l].rms > exact) fragmented[o] += area[f];
+    if (features[l].type == SurfaceType::Freeform || features[l].rms > exact || triangles[l] == 1) fragmented[o] += area[f];
   }
   std::vector<char> undo(was_split.size(), 0);
   bool any = false;
@@ -548,60 +551,18 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   identify_all(points, std::vector<char>(num_patches, 1));
   stage("fit");
 
-  // Split what no surface fits into planar regions (and, on noisy meshes, the connected rest);
-  // merging below joins pieces again where one surface fits them together. On exact
-  // tessellations (the typical patch fits to a hundredth of the tolerance, as the vertices of a CAD
-  // export lie on their faces) every planar facet is kept as a piece.
-  {
-    std::vector<double> rms, normal_rms;
-    for (const Feature& f : layer.features)
-      if (f.type != SurfaceType::Freeform) {
-        rms.push_back(f.spread);
-        normal_rms.push_back(f.normal_spread);
-      }
-    if (!rms.empty()) {
-      std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
-      std::nth_element(normal_rms.begin(), normal_rms.begin() + normal_rms.size() / 2, normal_rms.end());
-      const bool exact = rms[rms.size() / 2] < kExactFraction * layer.distance_tolerance;
-      const double noise = rms[rms.size() / 2] + floor;
-      const double normal_noise = normal_rms[normal_rms.size() / 2] + options.normal_floor_degrees * M_PI / 180.0;
-      int next_id = num_patches;
-      for (int p = 0; p < num_patches; ++p) {
-        const Feature& f = layer.features[p];
-        if (f.type == SurfaceType::Freeform || f.rms > options.freeform_ratio * noise + layer.distance_tolerance) {
-          next_id = split_patch(mesh, topology, p, noise, normal_noise, exact ? 1 : 2 * kInteriorPoints, layer.labels,
-                                next_id);
-          was_split[p] = exact ? 1 : 2;
-        }
-      }
-      if (next_id > num_patches) {
-        std::vector<char> which(next_id, 0);
-        for (int l : layer.labels)
-          if (l >= 0 && l < num_patches && layer.features[l].type == SurfaceType::Freeform) which[l] = 1;
-        for (int p = 0; p < num_patches; ++p)
-          if (layer.features[p].rms > options.freeform_ratio * noise + layer.distance_tolerance) which[p] = 1;
-        for (int p = num_patches; p < next_id; ++p) which[p] = 1;
-        curvature.resize(next_id);
-        for (int f = 0; f < mesh.num_faces(); ++f)  // a split region keeps the curvature of its patch
-          if (layer.labels[f] >= num_patches) curvature[layer.labels[f]] = patch_curvature[labels[f]];
-        points = patch_points(mesh, layer.labels, next_id);
-        identify_all(points, which);
-      }
-    }
-  }
-  const int patches = static_cast<int>(layer.features.size());
-  stage("split");
 
   // Move rim faces to the neighbour that explains them, refine the surfaces of the patches that
   // changed (same type, starting from the previous fit), and finally identify those afresh. Runs
   // again after merging, which brings surfaces that explain more of their neighbours' rims.
   auto triangle_counts = [&] {
-    std::vector<int> count(patches, 0);
+    std::vector<int> count(layer.features.size(), 0);
     for (int l : layer.labels)
       if (l >= 0) ++count[l];
     return count;
   };
   auto reassign = [&] {
+    const int patches = static_cast<int>(layer.features.size());
     const std::vector<int> before = triangle_counts();
     for (int round = 0; round < options.reassignment_rounds; ++round) {
       const std::vector<char> changed = reassign_faces(mesh, topology, layer.features, options, floor, layer.labels);
@@ -623,6 +584,52 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   };
   reassign();
   stage("reassign");
+  // Split what no surface fits into planar regions (and, on noisy meshes, the connected rest);
+  // merging below joins pieces again where one surface fits them together. On exact
+  // tessellations (the typical patch fits to a hundredth of the tolerance, as the vertices of a CAD
+  // export lie on their faces) every planar facet is kept as a piece.
+  {
+    std::vector<double> rms, normal_rms;
+    for (const Feature& f : layer.features)
+      if (f.type != SurfaceType::Freeform) {
+        rms.push_back(f.spread);
+        normal_rms.push_back(f.normal_spread);
+      }
+    if (!rms.empty()) {
+      std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
+      std::nth_element(normal_rms.begin(), normal_rms.begin() + normal_rms.size() / 2, normal_rms.end());
+      const bool exact = rms[rms.size() / 2] < kExactFraction * layer.distance_tolerance;
+      const double noise = rms[rms.size() / 2] + floor;
+      const double normal_noise = normal_rms[normal_rms.size() / 2] + options.normal_floor_degrees * M_PI / 180.0;
+      int next_id = num_patches;
+      const double split_above = options.split_ratio * noise + layer.distance_tolerance;
+      for (int p = 0; p < num_patches; ++p) {
+        const Feature& f = layer.features[p];
+        if (f.type == SurfaceType::Freeform || f.rms > split_above) {
+          next_id = split_patch(mesh, topology, p, noise, normal_noise, exact ? 1 : 2 * kInteriorPoints, layer.labels,
+                                next_id);
+          was_split[p] = exact ? 1 : 2;
+        }
+      }
+      if (next_id > num_patches) {
+        std::vector<char> which(next_id, 0);
+        for (int l : layer.labels)
+          if (l >= 0 && l < num_patches && layer.features[l].type == SurfaceType::Freeform) which[l] = 1;
+        for (int p = 0; p < num_patches; ++p)
+          if (layer.features[p].rms > split_above) which[p] = 1;
+        for (int p = num_patches; p < next_id; ++p) which[p] = 1;
+        curvature.resize(next_id);
+        for (int f = 0; f < mesh.num_faces(); ++f)  // a split region keeps the curvature of its patch
+          if (layer.labels[f] >= num_patches) curvature[layer.labels[f]] = patch_curvature[labels[f]];
+        points = patch_points(mesh, layer.labels, next_id);
+        identify_all(points, which);
+      }
+    }
+  }
+  stage("split");
+  reassign();
+  const int patches = static_cast<int>(layer.features.size());
+  stage("reassign_after_split");
   std::set<std::pair<int, int>> rejected;
   for (int pass = 0; pass < options.merge_passes; ++pass) {
     if (!merge_patches(mesh, topology, points, identify_points, options, layer.distance_tolerance, layer.features,
