@@ -8,16 +8,18 @@ import itertools
 
 import numpy as np
 
+from .features import idealize
 from .mesh import Mesh, MeshError
 from .segmentation import segment
 
-# Thesis colour code for fitted surface types, for when patches get one; RGB in 0..1.
+# Thesis colour code for the surface types; RGB in 0..1.
 SURFACE_COLORS = {
     "plane": (0.56, 0.93, 0.56),     # light green
     "cylinder": (1.0, 1.0, 0.0),     # yellow
     "cone": (0.68, 0.85, 0.90),      # light blue
     "sphere": (0.0, 0.39, 0.0),      # dark green
     "torus": (0.55, 0.0, 0.0),       # dark red
+    "freeform": (0.6, 0.6, 0.6),     # grey (not in the thesis, which has no freeform features)
 }
 TRANSITION_COLOR = (1.0, 0.0, 0.0)   # edges / transition triangles: red
 
@@ -46,12 +48,48 @@ def mesh_from_freecad(mesh):
     return Mesh(vertices, faces, source=getattr(mesh, "Label", None))
 
 
-def segment_mesh_object(obj):
-    """Segment a Mesh::Feature (or Mesh.Mesh); labels follow its facet order."""
+def _usable_mesh(obj):
     mesh = mesh_from_freecad(obj)
     if mesh.n_triangles == 0:
         raise MeshError("%s has no triangles" % (mesh.source or "the mesh"))
-    return segment(mesh)
+    return mesh
+
+
+def segment_mesh_object(obj):
+    """Segment a Mesh::Feature (or Mesh.Mesh); labels follow its facet order."""
+    return segment(_usable_mesh(obj))
+
+
+def idealize_mesh_object(obj):
+    """The feature layer (:class:`idealize.FeatureLayer`) of a Mesh::Feature or Mesh.Mesh."""
+    return idealize(_usable_mesh(obj))
+
+
+def type_colors(layer):
+    """(M, 3) RGB in 0..1: every triangle in the thesis colour of its feature's type, red where
+    it belongs to no feature."""
+    palette = np.array([SURFACE_COLORS[f["type"]] for f in layer.features] + [TRANSITION_COLOR])
+    labels = np.asarray(layer.labels)
+    return palette[np.where(labels >= 0, labels, len(layer.features))]
+
+
+def feature_table(layer):
+    """One line of text per feature: id, type, key parameters, RMS residual."""
+    lines = []
+    for f in layer.features:
+        p = f["params"]
+        if f["type"] == "plane":
+            key = "normal (%.3f, %.3f, %.3f)" % tuple(p["normal"])
+        elif f["type"] in ("cylinder", "sphere"):
+            key = "radius %.4g" % p["radius"]
+        elif f["type"] == "cone":
+            key = "half angle %.2f deg" % np.degrees(p["half_angle"])
+        elif f["type"] == "torus":
+            key = "radii %.4g / %.4g" % (p["major"], p["minor"])
+        else:
+            key = ""
+        lines.append("%4d  %-8s %-32s rms %.3g  (%d triangles)" % (f["id"], f["type"], key, f["rms"], f["triangles"]))
+    return lines
 
 
 def patch_colors(labels, transition=None):
@@ -72,6 +110,21 @@ def patch_colors(labels, transition=None):
     return colors
 
 
+def _colored_copy(doc, source_obj, suffix, colors, description):
+    """A Mesh::Feature "<Label><suffix>": a copy of source_obj's mesh with per-facet colours."""
+    kernel = source_obj.Mesh.copy()
+    if len(colors) != kernel.CountFacets:
+        raise MeshError("%d facet colours for %s, which has %d facets"
+                        % (len(colors), source_obj.Label, kernel.CountFacets))
+    obj = doc.addObject("Mesh::Feature", source_obj.Name + suffix)
+    obj.Label = source_obj.Label + suffix
+    obj.Mesh = kernel
+    obj.Placement = source_obj.Placement
+    obj.addProperty("App::PropertyColorList", FACE_COLORS, "Idealize", description)
+    setattr(obj, FACE_COLORS, [tuple(c) for c in np.asarray(colors).tolist()])
+    return obj
+
+
 def make_segmented_mesh(doc, source_obj, segmentation=None):
     """Add a Mesh::Feature "<Label>_Segmented" to doc: a copy of source_obj's mesh with a
     per-facet colour property (FaceColors) by patch. source_obj is not modified.
@@ -81,15 +134,18 @@ def make_segmented_mesh(doc, source_obj, segmentation=None):
     """
     if segmentation is None:
         segmentation = segment_mesh_object(source_obj)
-    kernel = source_obj.Mesh.copy()
-    if len(segmentation.labels) != kernel.CountFacets:
-        raise MeshError("the segmentation has %d labels but %s has %d facets"
-                        % (len(segmentation.labels), source_obj.Label, kernel.CountFacets))
-    obj = doc.addObject("Mesh::Feature", source_obj.Name + "_Segmented")
-    obj.Label = source_obj.Label + "_Segmented"
-    obj.Mesh = kernel
-    obj.Placement = source_obj.Placement
-    obj.addProperty("App::PropertyColorList", FACE_COLORS, "Idealize",
-                    "Colour of each facet: one per feature patch, red on transitions")
-    setattr(obj, FACE_COLORS, [tuple(c) for c in patch_colors(segmentation.labels, segmentation.transition).tolist()])
-    return obj
+    return _colored_copy(doc, source_obj, "_Segmented", patch_colors(segmentation.labels, segmentation.transition),
+                         "Colour of each facet: one per feature patch, red on transitions")
+
+
+def make_feature_mesh(doc, source_obj, layer=None):
+    """Add a Mesh::Feature "<Label>_Features" to doc: a copy of source_obj's mesh coloured by the
+    type of each facet's feature (thesis colours, SURFACE_COLORS). source_obj is not modified.
+
+    Computes the feature layer first unless one is given; callers wrap this in a transaction.
+    """
+    if layer is None:
+        layer = idealize_mesh_object(source_obj)
+    return _colored_copy(doc, source_obj, "_Features", type_colors(layer),
+                         "Colour of each facet: the type of its feature (plane light green, cylinder "
+                         "yellow, cone light blue, sphere dark green, torus dark red, freeform grey)")

@@ -118,6 +118,32 @@ def run():
     result["objects_after_undo"] = [o.Label for o in doc.Objects]
     result["source_visible_after_undo"] = source.ViewObject.Visibility
 
+    # Segment & Idealize: a copy coloured by feature type, undone in one step.
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(source)
+    names = {o.Name for o in doc.Objects}
+    Gui.runCommand("Idealize_SegmentIdealize")
+    Gui.updateGui()
+    new = [o for o in doc.Objects if o.Name not in names]
+    result["idealize_labels"] = [o.Label for o in new]
+    result["idealize_undo_name"] = doc.UndoNames[0] if doc.UndoNames else None
+    if new:
+        from idealize.freecad_mesh import SURFACE_COLORS
+        palette = {tuple(round(c, 2) for c in rgb): t for t, rgb in SURFACE_COLORS.items()}
+        seen = {}
+        for c in new[0].FaceColors:
+            t = palette.get(tuple(round(x, 2) for x in c[:3]), "other")
+            seen[t] = seen.get(t, 0) + 1
+        result["idealize_type_colors"] = seen
+        Gui.Selection.clearSelection()
+        view = Gui.ActiveDocument.ActiveView
+        view.viewIsometric()
+        view.fitAll()
+        Gui.updateGui()
+        view.saveImage(CONFIG["screenshot_types"], 800, 600, "White")
+    doc.undo()
+    result["objects_after_idealize_undo"] = [o.Label for o in doc.Objects]
+
     # A mesh the core rejects: the transaction is aborted and the error is shown.
     empty = doc.addObject("Mesh::Feature", "Empty")
     doc.recompute()
@@ -141,7 +167,8 @@ os._exit(0)
 
 def run_driver(tmp_path, attempt):
     config = {"repo": REPO, "result": str(tmp_path / ("result%d.json" % attempt)),
-              "screenshot": str(tmp_path / "segment-gui.png")}
+              "screenshot": str(tmp_path / "segment-gui.png"),
+              "screenshot_types": str(tmp_path / "idealize-gui.png")}
     script = tmp_path / ("driver%d.py" % attempt)
     script.write_text(DRIVER.replace("__CONFIG__", repr(json.dumps(config))))
     env = dict(os.environ, QTWEBENGINE_DISABLE_SANDBOX="1")
@@ -191,6 +218,14 @@ def test_segment_command_in_freecad_gui(tmp_path):
 
     assert result["objects_after_undo"] == ["Part"]
     assert result["source_visible_after_undo"] is True
+
+    # Box with a hole: 6 planes (light green) and the hole's cylinder (yellow), nothing else.
+    assert result["idealize_labels"] == ["Part_Features"]
+    assert result["idealize_undo_name"] == "Segment and idealize mesh"
+    colors = result["idealize_type_colors"]
+    assert set(colors) == {"plane", "cylinder"}, colors
+    assert sum(colors.values()) == result["source_before"][1]
+    assert result["objects_after_idealize_undo"] == ["Part"]
 
     assert result["objects_after_error"] == ["Part", "Empty"]
     assert result["undo_added_by_error"] == 0

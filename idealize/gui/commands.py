@@ -60,4 +60,41 @@ class SegmentCommand:
         FreeCADGui.Selection.addSelection(result)
 
 
+class SegmentIdealizeCommand:
+    def GetResources(self):
+        return {"Pixmap": icon("Idealize_SegmentIdealize"),
+                "MenuText": "Segment && Idealize",
+                "ToolTip": "Find the features of the selected mesh (planes, cylinders, cones, spheres, tori) "
+                           "with exact parameters; adds a copy coloured by feature type"}
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and _selected_mesh() is not None
+
+    def Activated(self):
+        source = _selected_mesh()
+        doc = source.Document
+        start = time.perf_counter()
+        doc.openTransaction("Segment and idealize mesh")
+        try:
+            layer = freecad_mesh.idealize_mesh_object(source)
+            result = freecad_mesh.make_feature_mesh(doc, source, layer)
+            doc.recompute()
+            result.ViewObject.Coloring = True
+            source.ViewObject.Visibility = False
+            doc.commitTransaction()
+        except Exception as error:  # anything: the document must not keep half a result
+            doc.abortTransaction()
+            _report_error("Segment & Idealize", error)
+            return
+        seconds = time.perf_counter() - start
+        kinds = ", ".join("%d %s" % (n, t) for t, n in sorted(layer.type_counts().items()))
+        message = "Idealize: %s has %d features (%s), deviation %.3g max, in %.2f s" % (
+            source.Label, len(layer.features), kinds, layer.deviation["max"], seconds)
+        FreeCAD.Console.PrintMessage(message + "\n" + "\n".join(freecad_mesh.feature_table(layer)) + "\n")
+        FreeCADGui.getMainWindow().statusBar().showMessage(message, 15000)
+        FreeCADGui.Selection.clearSelection()
+        FreeCADGui.Selection.addSelection(result)
+
+
 FreeCADGui.addCommand("Idealize_Segment", SegmentCommand())
+FreeCADGui.addCommand("Idealize_SegmentIdealize", SegmentIdealizeCommand())
