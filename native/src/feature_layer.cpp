@@ -472,9 +472,9 @@ void compact_features(std::vector<int>& labels, std::vector<Feature>& features) 
   features = std::move(kept);
 }
 
-// Moves every input vertex onto the surfaces of the features around it: onto the one surface
-// inside a patch, onto the intersection of two or three along edges and at corners (alternating
-// projections, which converge to the nearest common point of transversal surfaces).
+// Moves every input vertex onto the surfaces of the features around it that explain it: onto the
+// one surface inside a patch, onto the intersection of two or three along edges and at corners
+// (alternating projections, which converge to the nearest common point of transversal surfaces).
 void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
                       const std::vector<Feature>& features, double tolerance, FeatureLayer& layer) {
   layer.idealized_vertices = mesh.V;
@@ -498,6 +498,12 @@ void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, co
     ++measured;
     layer.max_deviation = std::max(layer.max_deviation, nearest);
 
+    // A surface that does not explain the vertex (beyond 3 σ of its fit and the tolerance: the
+    // vertex lies in a part of the patch the feature does not describe) does not move it.
+    around.erase(std::remove_if(around.begin(), around.end(), [&](int p) {
+                   return std::abs(signed_distance(features[p].surface, original)) > 3.0 * features[p].spread + tolerance;
+                 }), around.end());
+    if (around.empty()) continue;
     Eigen::Vector3d x = original;
     const int rounds = around.size() == 1 ? 1 : 50;
     for (int r = 0; r < rounds; ++r) {
