@@ -36,9 +36,22 @@ double weighted_median(std::vector<std::pair<double, double>> values) {  // (val
   return values.empty() ? 0.0 : values.back().first;
 }
 
+// Whether a plane touches a cylinder whose axis is parallel to it: the axis lies one radius from
+// the plane, within the distance tolerance or the radius tolerance. On a scan the plane's patch
+// takes the first degrees of a fillet's arc, so the normals at the patch boundary differ by more
+// than the angle tolerance although the surfaces are tangent.
+bool plane_touches_cylinder(const Feature& plane, const Feature& cylinder, double angle_tolerance,
+                            double distance_tolerance, double radius_tolerance) {
+  if (plane.type != SurfaceType::Plane || cylinder.type != SurfaceType::Cylinder) return false;
+  const Surface &p = plane.surface, &c = cylinder.surface;
+  if (std::abs(p.axis.dot(c.axis)) > std::sin(angle_tolerance)) return false;
+  const double distance = std::abs((c.point - p.point).dot(p.axis));
+  return std::abs(distance - c.radius) <= std::max(distance_tolerance, radius_tolerance * c.radius);
+}
+
 void find_adjacency(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
-                    const std::vector<Feature>& features, double angle_tolerance,
-                    std::vector<FeatureAdjacency>& adjacency) {
+                    const std::vector<Feature>& features, double angle_tolerance, double distance_tolerance,
+                    double radius_tolerance, std::vector<FeatureAdjacency>& adjacency) {
   std::map<std::pair<int, int>, std::vector<std::pair<double, double>>> boundaries;  // (angle, length)
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int c = 0; c < 3; ++c) {
@@ -58,7 +71,11 @@ void find_adjacency(const TriangleMesh& mesh, const MeshTopology& topology, cons
     a.b = pair.second;
     for (const auto& s : samples) a.length += s.second;
     a.angle = weighted_median(samples);
-    a.continuity = a.angle < angle_tolerance ? Continuity::G1 : Continuity::G0;
+    const Feature &fa = features[a.a], &fb = features[a.b];
+    const bool touching =
+        plane_touches_cylinder(fa, fb, angle_tolerance, distance_tolerance, radius_tolerance) ||
+        plane_touches_cylinder(fb, fa, angle_tolerance, distance_tolerance, radius_tolerance);
+    a.continuity = a.angle < angle_tolerance || touching ? Continuity::G1 : Continuity::G0;
     adjacency.push_back(a);
   }
 }
@@ -94,7 +111,7 @@ void build_feature_graph(const TriangleMesh& mesh, const MeshTopology& topology,
                          const std::vector<Feature>& features, double angle_tolerance, double distance_tolerance,
                          double radius_tolerance, std::vector<FeatureAdjacency>& adjacency,
                          std::vector<FeatureRelation>& relations) {
-  find_adjacency(mesh, topology, labels, features, angle_tolerance, adjacency);
+  find_adjacency(mesh, topology, labels, features, angle_tolerance, distance_tolerance, radius_tolerance, adjacency);
   relations.clear();
   const double cos_tolerance = std::cos(angle_tolerance), sin_tolerance = std::sin(angle_tolerance);
   auto parallel = [&](int x, int y) {

@@ -1,6 +1,6 @@
 #include "idealization.h"
 
-#include <Eigen/Geometry>
+#include <Eigen/Dense>
 
 #include <algorithm>
 #include <array>
@@ -147,6 +147,46 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       Eigen::Vector3d centre = Eigen::Vector3d::Zero();
       for (int m : group) centre += features[m].area * features[m].surface.point / area;
       for (int m : group) features[m].surface.point = centre;
+    }
+  }
+
+  // 6. Tangency (thesis 4.3): a cylinder tangent to planes parallel to its axis keeps its radius
+  // (possibly just made equal to others) and moves its axis so that it touches them: one plane
+  // fixes the axis's distance from it, two fix the axis.
+  for (Feature& cylinder : features) {
+    if (cylinder.type != SurfaceType::Cylinder) continue;
+    Surface& c = cylinder.surface;
+    std::vector<const Surface*> planes;
+    for (const FeatureRelation& r : relations) {
+      if (r.kind != "tangent" || (r.features[0] != cylinder.id && r.features[1] != cylinder.id)) continue;
+      const Feature& other = features[r.features[0] == cylinder.id ? r.features[1] : r.features[0]];
+      if (other.type == SurfaceType::Plane && std::abs(other.surface.axis.dot(c.axis)) <= std::sin(angle))
+        planes.push_back(&other.surface);
+    }
+    // Each plane n·x = n·o must lie at distance R from the axis, on the side the axis is now.
+    auto side = [&](const Surface* plane) { return (c.point - plane->point).dot(plane->axis) >= 0.0 ? 1.0 : -1.0; };
+    if (planes.size() == 1) {
+      const Surface& plane = *planes[0];
+      const double distance = (c.point - plane.point).dot(plane.axis);
+      c.point += (side(&plane) * c.radius - distance) * plane.axis;
+    } else if (planes.size() >= 2) {
+      // The first two planes that are not parallel to each other.
+      const Surface* second = nullptr;
+      for (size_t i = 1; i < planes.size() && !second; ++i)
+        if (std::abs(planes[i]->axis.dot(planes[0]->axis)) < std::cos(angle)) second = planes[i];
+      if (!second) continue;
+      Eigen::Vector3d e1, e2;
+      orthonormal_frame(c.axis, e1, e2);
+      Eigen::Matrix2d a;
+      Eigen::Vector2d b;
+      int row = 0;
+      for (const Surface* plane : {planes[0], second}) {
+        a.row(row) << plane->axis.dot(e1), plane->axis.dot(e2);
+        b[row] = side(plane) * c.radius - (c.point - plane->point).dot(plane->axis);
+        ++row;
+      }
+      const Eigen::Vector2d shift = a.colPivHouseholderQr().solve(b);
+      if (shift.allFinite()) c.point += shift[0] * e1 + shift[1] * e2;
     }
   }
 
