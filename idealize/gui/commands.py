@@ -23,6 +23,33 @@ def _report_error(title, error):
     QtGui.QMessageBox.critical(FreeCADGui.getMainWindow(), "Idealize - " + title, message)
 
 
+def _run_on_selection(title, transaction, compute, make_result, describe):
+    """Shared body of the commands: compute on the selected mesh, add the result in one undoable
+    transaction, hide the source, report; on any error abort the transaction and show it."""
+    source = _selected_mesh()  # not None: FreeCAD runs commands only when IsActive()
+    doc = source.Document
+    start = time.perf_counter()
+    doc.openTransaction(transaction)
+    try:
+        computed = compute(source)
+        result = make_result(doc, source, computed)
+        doc.recompute()
+        # Per-facet colours come from the FaceColors property; Coloring switches them on.
+        result.ViewObject.Coloring = True
+        # The copy lies exactly on the source: hide the source so the colours do not z-fight.
+        source.ViewObject.Visibility = False
+        doc.commitTransaction()
+    except Exception as error:  # anything: the document must not keep half a result
+        doc.abortTransaction()
+        _report_error(title, error)
+        return
+    message, details = describe(source, computed, time.perf_counter() - start)
+    FreeCAD.Console.PrintMessage(message + "\n" + "".join(line + "\n" for line in details))
+    FreeCADGui.getMainWindow().statusBar().showMessage(message, 15000)
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(result)
+
+
 class SegmentCommand:
     def GetResources(self):
         return {"Pixmap": icon("Idealize_Segment"),
@@ -33,31 +60,12 @@ class SegmentCommand:
         return FreeCAD.ActiveDocument is not None and _selected_mesh() is not None
 
     def Activated(self):
-        source = _selected_mesh()  # not None: FreeCAD runs commands only when IsActive()
-        doc = source.Document
-        start = time.perf_counter()
-        doc.openTransaction("Segment mesh")
-        try:
-            segmentation = freecad_mesh.segment_mesh_object(source)
-            result = freecad_mesh.make_segmented_mesh(doc, source, segmentation)
-            doc.recompute()
-            # Per-facet colours come from the FaceColors property; Coloring switches them on.
-            result.ViewObject.Coloring = True
-            # The copy lies exactly on the source: hide the source so the colours do not z-fight.
-            source.ViewObject.Visibility = False
-            doc.commitTransaction()
-        except Exception as error:  # anything: the document must not keep half a result
-            doc.abortTransaction()
-            _report_error("Segment", error)
-            return
-        seconds = time.perf_counter() - start
-        transition = int(segmentation.transition.sum())
-        message = "Idealize: %s split into %d patches (%d transition triangles) in %.2f s" % (
-            source.Label, segmentation.n_features, transition, seconds)
-        FreeCAD.Console.PrintMessage(message + "\n")
-        FreeCADGui.getMainWindow().statusBar().showMessage(message, 15000)
-        FreeCADGui.Selection.clearSelection()
-        FreeCADGui.Selection.addSelection(result)
+        def describe(source, segmentation, seconds):
+            return ("Idealize: %s split into %d patches (%d transition triangles) in %.2f s" % (
+                source.Label, segmentation.n_features, int(segmentation.transition.sum()), seconds), [])
+
+        _run_on_selection("Segment", "Segment mesh", freecad_mesh.segment_mesh_object,
+                          freecad_mesh.make_segmented_mesh, describe)
 
 
 class SegmentIdealizeCommand:
@@ -71,29 +79,14 @@ class SegmentIdealizeCommand:
         return FreeCAD.ActiveDocument is not None and _selected_mesh() is not None
 
     def Activated(self):
-        source = _selected_mesh()
-        doc = source.Document
-        start = time.perf_counter()
-        doc.openTransaction("Segment and idealize mesh")
-        try:
-            layer = freecad_mesh.idealize_mesh_object(source)
-            result = freecad_mesh.make_feature_mesh(doc, source, layer)
-            doc.recompute()
-            result.ViewObject.Coloring = True
-            source.ViewObject.Visibility = False
-            doc.commitTransaction()
-        except Exception as error:  # anything: the document must not keep half a result
-            doc.abortTransaction()
-            _report_error("Segment & Idealize", error)
-            return
-        seconds = time.perf_counter() - start
-        kinds = ", ".join("%d %s" % (n, t) for t, n in sorted(layer.type_counts().items()))
-        message = "Idealize: %s has %d features (%s), deviation %.3g max, in %.2f s" % (
-            source.Label, len(layer.features), kinds, layer.deviation["max"], seconds)
-        FreeCAD.Console.PrintMessage(message + "\n" + "\n".join(freecad_mesh.feature_table(layer)) + "\n")
-        FreeCADGui.getMainWindow().statusBar().showMessage(message, 15000)
-        FreeCADGui.Selection.clearSelection()
-        FreeCADGui.Selection.addSelection(result)
+        def describe(source, layer, seconds):
+            kinds = ", ".join("%d %s" % (n, t) for t, n in sorted(layer.type_counts().items()))
+            return ("Idealize: %s has %d features (%s), deviation %.3g max, in %.2f s" % (
+                source.Label, len(layer.features), kinds, layer.deviation["max"], seconds),
+                freecad_mesh.feature_table(layer))
+
+        _run_on_selection("Segment & Idealize", "Segment and idealize mesh", freecad_mesh.idealize_mesh_object,
+                          freecad_mesh.make_feature_mesh, describe)
 
 
 FreeCADGui.addCommand("Idealize_Segment", SegmentCommand())

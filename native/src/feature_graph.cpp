@@ -24,18 +24,6 @@ Eigen::Vector3d oriented_normal(const Feature& feature, const Eigen::Vector3d& p
   return n.dot(face) < 0.0 ? Eigen::Vector3d(-n) : n;
 }
 
-double weighted_median(std::vector<std::pair<double, double>> values) {  // (value, weight)
-  std::sort(values.begin(), values.end());
-  double total = 0.0;
-  for (const auto& v : values) total += v.second;
-  double running = 0.0;
-  for (const auto& v : values) {
-    running += v.second;
-    if (running >= 0.5 * total) return v.first;
-  }
-  return values.empty() ? 0.0 : values.back().first;
-}
-
 // Whether a plane touches a cylinder whose axis is parallel to it: the axis lies one radius from
 // the plane, within the distance tolerance or the radius tolerance. On a scan the plane's patch
 // takes the first degrees of a fillet's arc, so the normals at the patch boundary differ by more

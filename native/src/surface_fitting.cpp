@@ -349,9 +349,7 @@ void fit_residuals(const Surface& surface, const MatrixX3d& points, const Eigen:
   rms = total > 0.0 ? std::sqrt(sum / total) : 0.0;
 }
 
-namespace {
-
-double weighted_median(std::vector<std::pair<double, double>>& values) {  // (value, weight)
+double weighted_median(std::vector<std::pair<double, double>> values) {
   std::sort(values.begin(), values.end());
   double total = 0.0;
   for (const auto& v : values) total += v.second;
@@ -362,6 +360,8 @@ double weighted_median(std::vector<std::pair<double, double>>& values) {  // (va
   }
   return values.empty() ? 0.0 : values.back().first;
 }
+
+namespace {
 
 // The normal RMS angle and the robust spreads of a fit, on an even subsample of at most
 // kStatisticsPoints points and samples: medians and means of that many are as good as of all.
@@ -382,8 +382,8 @@ void fit_statistics(const FitData& data, SurfaceFit& fit) {
     total += data.sample_weights[i];
   }
   fit.normal_rms = total > 0.0 ? std::sqrt(sum / total) : 0.0;
-  fit.spread = 1.4826 * weighted_median(distance);
-  fit.normal_spread = 1.4826 * weighted_median(angle);
+  fit.spread = 1.4826 * weighted_median(std::move(distance));
+  fit.normal_spread = 1.4826 * weighted_median(std::move(angle));
 }
 
 }  // namespace

@@ -15,6 +15,9 @@
 #include "mesh.h"
 #include "surface.h"
 
+#include <utility>
+#include <vector>
+
 namespace idealize {
 
 struct FitOptions {
@@ -54,6 +57,9 @@ struct SurfaceFit {
 // direct formulas otherwise.
 SurfaceFit fit_surface(SurfaceType type, const FitData& data, const FitOptions& options = {},
                        const Surface* initial = nullptr);
+
+// The weighted median of (value, weight) pairs (0 for none).
+double weighted_median(std::vector<std::pair<double, double>> values);
 
 // RMS and maximum distance of the points from a surface.
 void fit_residuals(const Surface& surface, const MatrixX3d& points, const Eigen::VectorXd& weights,
