@@ -70,11 +70,14 @@ int HistogramRanges::range_of(double value) const {
 }
 
 double HistogramRanges::range_lower(int r) const {
-  return r == 0 ? -std::numeric_limits<double>::infinity() : valleys[r - 1];
+  // Bounds-checked: with no values at all there are no ranges and no valleys (found by fuzz_segment).
+  return r <= 0 || r > static_cast<int>(valleys.size()) ? -std::numeric_limits<double>::infinity()
+                                                         : valleys[r - 1];
 }
 
 double HistogramRanges::range_upper(int r) const {
-  return r == num_ranges() - 1 ? std::numeric_limits<double>::infinity() : valleys[r];
+  return r < 0 || r >= static_cast<int>(valleys.size()) ? std::numeric_limits<double>::infinity()
+                                                          : valleys[r];
 }
 
 HistogramRanges histogram_ranges(const std::vector<double>& values, const std::vector<char>& mask,
