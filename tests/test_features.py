@@ -340,6 +340,12 @@ def test_projection_of_a_noisy_bracket(cad_bracket):
     X = layer.idealized_vertices
     tangent = {(a["a"], a["b"]) for a in layer.adjacency if a["continuity"] == "G1"}
     for v, around in enumerate(vertex_features(layer.labels, F, len(V))):
+        # A surface moves a vertex only when it explains it (within 3 sigma of its fit).
+        around = [label for label in around
+                  if abs(distance(layer.features[label], noisy[v:v + 1])[0]) <= 3 * layer.features[label]["spread"]]
+        if not around:
+            assert np.allclose(X[v], noisy[v])  # left where it was
+            continue
         d = [abs(distance(layer.features[label], X[v:v + 1])[0]) for label in around]
         assert min(d) < 1e-8  # on its own surface
         if not any((a, b) in tangent for a in around for b in around):

@@ -498,10 +498,10 @@ void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, co
     ++measured;
     layer.max_deviation = std::max(layer.max_deviation, nearest);
 
-    // A surface that does not explain the vertex (beyond 3 σ of its fit and the tolerance: the
-    // vertex lies in a part of the patch the feature does not describe) does not move it.
+    // A surface that does not explain the vertex (beyond 3 σ of its fit: the vertex lies in a part
+    // of the patch the feature does not describe) does not move it.
     around.erase(std::remove_if(around.begin(), around.end(), [&](int p) {
-                   return std::abs(signed_distance(features[p].surface, original)) > 3.0 * features[p].spread + tolerance;
+                   return std::abs(signed_distance(features[p].surface, original)) > 3.0 * features[p].spread + kExactFraction * tolerance;
                  }), around.end());
     if (around.empty()) continue;
     Eigen::Vector3d x = original;
