@@ -315,12 +315,11 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
 // stays whole that way, while on an exact tessellation (min_region_faces = 1) curved parts fall
 // apart into planar facets that merging joins again. The first region keeps the patch's id, the
 // others get new ids from `next_id` on.
-int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
-                double normal_noise, int min_region_faces, std::vector<int>& labels, int next_id) {
+int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Eigen::VectorXd& area, int patch,
+                double noise, double normal_noise, int min_region_faces, std::vector<int>& labels, int next_id) {
   std::vector<int> faces;
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (labels[f] == patch) faces.push_back(f);
-  const Eigen::VectorXd area = face_areas(mesh);
   std::stable_sort(faces.begin(), faces.end(), [&](int x, int y) { return area[x] > area[y]; });
   auto normal_of = [&](int f) {
     const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
@@ -424,11 +423,11 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, int patc
 // surfaces fit exactly. Where most of a split patch ended in pieces that fit only approximately (to
 // more than `exact` RMS) or in single triangles (which any plane fits), it was a freeform surface:
 // the split is undone and the patch identified afresh.
-void undo_inexact_splits(const TriangleMesh& mesh, const std::vector<int>& original, const std::vector<char>& was_split,
-                         double exact, const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
+void undo_inexact_splits(const TriangleMesh& mesh, const Eigen::VectorXd& area, const std::vector<int>& original,
+                         const std::vector<char>& was_split, double exact,
+                         const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
                          const std::vector<PatchCurvature>& curvature, std::vector<Feature>& features,
                          std::vector<int>& labels) {
-  const Eigen::VectorXd area = face_areas(mesh);
   std::vector<int> triangles(features.size(), 0);
   for (int l : labels)
     if (l >= 0) ++triangles[l];
@@ -542,6 +541,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   const double floor = 1e-6 * diagonal;  // rounding of single-precision STL coordinates, with margin
 
   const MeshTopology topology(mesh);
+  const Eigen::VectorXd area = face_areas(mesh);
   layer.labels = labels;
   std::vector<PatchCurvature> curvature = patch_curvature;  // grows with split patches
   std::vector<char> was_split(num_patches, 0);  // 1: split as an exact tessellation, 2: as a noisy mesh
@@ -615,7 +615,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       for (int p = 0; p < num_patches; ++p) {
         const Feature& f = layer.features[p];
         if (badly_fitting(f)) {
-          next_id = split_patch(mesh, topology, p, noise, normal_noise, exact ? 1 : 2 * kInteriorPoints, layer.labels,
+          next_id = split_patch(mesh, topology, area, p, noise, normal_noise, exact ? 1 : 2 * kInteriorPoints, layer.labels,
                                 next_id);
           was_split[p] = exact ? 1 : 2;
         }
@@ -649,10 +649,9 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   stage("merge");
   reassign();
   stage("reassign_after_merge");
-  undo_inexact_splits(mesh, labels, was_split, kExactFraction * layer.distance_tolerance, identify_points, curvature,
+  undo_inexact_splits(mesh, area, labels, was_split, kExactFraction * layer.distance_tolerance, identify_points, curvature,
                       layer.features, layer.labels);
   compact_features(layer.labels, layer.features);
-  const Eigen::VectorXd area = face_areas(mesh);
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (layer.labels[f] >= 0) {
       layer.features[layer.labels[f]].area += area[f];

@@ -28,9 +28,6 @@ struct Surface {
 
   // Whether the surface has an axis (cylinder, cone, torus) or a normal direction (plane).
   bool has_direction() const { return type != SurfaceType::Sphere && type != SurfaceType::Freeform; }
-  bool is_axial() const {
-    return type == SurfaceType::Cylinder || type == SurfaceType::Cone || type == SurfaceType::Torus;
-  }
 };
 
 // Signed distance of p from the surface (positive on the side away from the axis or centre, and

@@ -89,19 +89,22 @@ Eigen::Vector3d smallest_eigenvector(const Eigen::Matrix3d& m) {
   return solver.eigenvectors().col(0);
 }
 
-// Circle through 2D points, algebraic (Kåsa) fit: returns false when the points are collinear.
-bool fit_circle_2d(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& w,
-                   Eigen::Vector2d& centre, double& radius) {
-  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+// Circle (N = 2) or sphere (N = 3) through points, algebraic (Kåsa) fit: |q|² = 2 c·q + (r² − |c|²)
+// in the weighted least-squares sense. Returns false when the points are collinear (coplanar).
+template <int N>
+bool algebraic_sphere(const std::vector<Eigen::Matrix<double, N, 1>>& q, const std::vector<double>& w,
+                      Eigen::Matrix<double, N, 1>& centre, double& radius) {
+  Eigen::Matrix<double, N + 1, N + 1> a = Eigen::Matrix<double, N + 1, N + 1>::Zero();
+  Eigen::Matrix<double, N + 1, 1> b = Eigen::Matrix<double, N + 1, 1>::Zero();
   for (size_t i = 0; i < q.size(); ++i) {
-    const Eigen::Vector3d row(2.0 * q[i].x(), 2.0 * q[i].y(), 1.0);
+    Eigen::Matrix<double, N + 1, 1> row;
+    row << 2.0 * q[i], 1.0;
     a += w[i] * row * row.transpose();
     b += w[i] * row * q[i].squaredNorm();
   }
-  const Eigen::Vector3d x = a.ldlt().solve(b);
-  centre = x.head<2>();
-  const double r2 = x[2] + centre.squaredNorm();
+  const Eigen::Matrix<double, N + 1, 1> x = a.ldlt().solve(b);
+  centre = x.template head<N>();
+  const double r2 = x[N] + centre.squaredNorm();
   radius = r2 > 0.0 ? std::sqrt(r2) : 0.0;
   return x.allFinite() && radius > 0.0;
 }
@@ -143,19 +146,11 @@ Surface seed_plane(const Sample& s) {
 }
 
 Surface seed_sphere(const Sample& s) {
-  Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
-  Eigen::Vector4d b = Eigen::Vector4d::Zero();
-  for (size_t i = 0; i < s.p.size(); ++i) {
-    const Eigen::Vector4d row(2.0 * s.p[i].x(), 2.0 * s.p[i].y(), 2.0 * s.p[i].z(), 1.0);
-    a += s.w[i] * row * row.transpose();
-    b += s.w[i] * row * s.p[i].squaredNorm();
-  }
-  const Eigen::Vector4d x = a.ldlt().solve(b);
   Surface out;
   out.type = SurfaceType::Sphere;
-  out.point = x.head<3>();
-  const double r2 = x[3] + out.point.squaredNorm();
-  out.radius = r2 > 0.0 ? std::sqrt(r2) : 0.0;
+  Eigen::Vector3d centre;
+  algebraic_sphere<3>(s.p, s.w, centre, out.radius);  // a failed fit leaves an implausible sphere
+  out.point = centre;
   return out;
 }
 
@@ -168,7 +163,7 @@ Surface seed_cylinder(const Sample& s) {
   std::vector<Eigen::Vector2d> q(s.p.size());
   for (size_t i = 0; i < s.p.size(); ++i) q[i] = Eigen::Vector2d(s.p[i].dot(e1), s.p[i].dot(e2));
   Eigen::Vector2d centre;
-  if (!fit_circle_2d(q, s.w, centre, out.radius)) out.radius = 0.0;
+  if (!algebraic_sphere<2>(q, s.w, centre, out.radius)) out.radius = 0.0;
   out.point = centre.x() * e1 + centre.y() * e2;
   return out;
 }
@@ -232,7 +227,7 @@ Surface seed_torus(const Sample& s) {
   std::vector<Eigen::Vector2d> zr;
   profile(s, origin, out.axis, zr);
   Eigen::Vector2d tube;
-  if (!fit_circle_2d(zr, s.w, tube, out.minor)) return out;
+  if (!algebraic_sphere<2>(zr, s.w, tube, out.minor)) return out;
   out.point = origin + tube.x() * out.axis;
   out.radius = tube.y();
   return out;
