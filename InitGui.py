@@ -15,7 +15,7 @@ class IdealizeWorkbench(FreeCADGui.Workbench):
     def Initialize(self):
         # Imported on first activation only: keeps FreeCAD start-up free of the native core.
         import idealize.gui.commands  # noqa: F401  (registers the commands)
-        commands = ["Idealize_Segment", "Idealize_SegmentIdealize"]
+        commands = ["Idealize_Segment", "Idealize_SegmentIdealize", "Idealize_MakeSolid", "Idealize_ExportStep"]
         self.appendToolbar("Idealize", commands)
         self.appendMenu("&Idealize", commands)
 

@@ -10,12 +10,16 @@ Console use (plain Python or FreeCAD)::
     layer = idealize.idealize(mesh)
     layer.features    # type, params, rms per feature
     layer.relations   # parallel, coaxial, tangent, ...
+    solid = idealize.make_solid(layer)
+    solid.solid       # True: a valid closed solid
+    solid.write_step("part.step")
 """
+from .brep import Solid, make_solid
 from .curvature import vertex_curvature
 from .features import FeatureLayer, idealize
 from .mesh import Mesh, MeshError, load_mesh
 from .segmentation import Segmentation, segment
 
-__all__ = ["FeatureLayer", "Mesh", "MeshError", "idealize", "load_mesh", "Segmentation", "segment",
-           "vertex_curvature"]
+__all__ = ["FeatureLayer", "Mesh", "MeshError", "idealize", "load_mesh", "make_solid", "Segmentation",
+           "segment", "Solid", "vertex_curvature"]
 __version__ = "0.1.0"

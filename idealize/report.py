@@ -6,10 +6,11 @@ import numpy as np
 from . import __version__
 
 
-def build_report(mesh, layer, timings, step):
-    """The report of one conversion; `layer` is the :class:`idealize.FeatureLayer`."""
+def build_report(mesh, layer, timings, step, solid=None):
+    """The report of one conversion; `layer` is the :class:`idealize.FeatureLayer`, `solid` the
+    :class:`idealize.Solid` made from it (None: no "brep" entry)."""
     segmentation = layer.segmentation
-    return {
+    report = {
         "idealize_version": __version__,
         "input": {
             "path": mesh.source,
@@ -32,6 +33,9 @@ def build_report(mesh, layer, timings, step):
         "timings": {name: round(float(seconds), 6) for name, seconds in timings.items()},
         "step": step,
     }
+    if solid is not None:
+        report["brep"] = solid.report()
+    return report
 
 
 def _feature(feature):

@@ -40,10 +40,35 @@ def test_convert_writes_report_with_public_keys(tmp_path, sphere_stl):
     assert sum(f["triangles"] for f in report["features"]) == sum(1 for x in report["labels"] if x >= 0)
     assert all(0 <= t < triangles for t in report["transition_triangles"])
     assert report["timings"]["total"] > 0 and "segment" in report["timings"]
-    # Until the B-rep issue lands, the STEP file is honestly not written.
-    assert report["step"]["written"] is False
-    assert not (tmp_path / "out.step").exists()
-    assert "no STEP file was written" in result.stderr
+    # The fitted solid: one sphere face, its volume, and the STEP file holding it.
+    brep = report["brep"]
+    assert {"valid", "closed", "solid", "faces", "volume", "surface_types", "max_deviation"} <= set(brep)
+    assert brep["solid"] and brep["valid"] and brep["closed"] and brep["faces"] == 1
+    assert brep["surface_types"] == {"sphere": 1}
+    assert brep["volume"] == pytest.approx(4 / 3 * np.pi * 1000, rel=2e-3)  # icosphere radius 10
+    assert brep["max_deviation"] < 0.2
+    assert report["step"] == {"written": True, "path": str(tmp_path / "out.step"), "solid": True}
+    assert (tmp_path / "out.step").read_text().startswith("ISO-10303-21;")
+    assert "brep" in report["timings"] and "step" in report["timings"]
+
+
+def test_convert_without_a_solid_writes_faces_and_exits_1(tmp_path):
+    """An open mesh (a box without its top) cannot close: its five faces are written, the report
+    says why, and the exit status is 1."""
+    V = np.array([[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0],
+                  [0, 0, 10], [10, 0, 10], [10, 10, 10], [0, 10, 10]], float)
+    quads = [(0, 3, 2, 1), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]
+    F = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))], np.int32)
+    path = tmp_path / "open.stl"
+    write_binary_stl(path, V, F)
+    report_path = tmp_path / "r.json"
+    result = run_cli("convert", str(path), "-o", str(tmp_path / "o.step"), "--report", str(report_path))
+    assert result.returncode == 1, result.stderr
+    assert "no valid closed solid" in result.stderr
+    report = json.loads(report_path.read_text())
+    assert report["brep"]["solid"] is False and report["brep"]["closed"] is False
+    assert report["brep"]["faces"] == 5 and report["brep"]["problems"]
+    assert report["step"]["written"] is True and report["step"]["solid"] is False
 
 
 def test_labels_follow_input_file_order(tmp_path, sphere_stl):

@@ -356,8 +356,8 @@ def test_projection_of_a_noisy_bracket(cad_bracket):
 
 
 # ---------------------------------------------------------------- 5. freeform
-@needs_freecad
-def test_wavy_top_is_freeform():
+def wavy_top():
+    """A 40 x 30 block whose top is a B-spline surface with 2 mm waves, on planar sides."""
     FreeCAD, Part, _ = shapes.freecad()
     n = 9
     poles = [[FreeCAD.Vector(40 * i / (n - 1), 30 * j / (n - 1),
@@ -365,7 +365,12 @@ def test_wavy_top_is_freeform():
               for j in range(n)] for i in range(n)]
     top = Part.BSplineSurface()
     top.interpolate(poles)
-    solid = top.toShape().extrude(FreeCAD.Vector(0, 0, -30)).common(Part.makeBox(40, 30, 30, FreeCAD.Vector(0, 0, -5)))
+    return top.toShape().extrude(FreeCAD.Vector(0, 0, -30)).common(Part.makeBox(40, 30, 30, FreeCAD.Vector(0, 0, -5)))
+
+
+@needs_freecad
+def test_wavy_top_is_freeform():
+    solid = wavy_top()
     V, F, gt, layer = layer_of(solid)
     areas = shapes.triangle_areas(V, F)
     assert correct_faces(layer.labels, gt, areas) == 6

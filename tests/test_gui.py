@@ -59,6 +59,16 @@ def red_and_colour_counts(path):
     return red, sum(n >= 0.005 * len(rgb) for n in area.values())
 
 
+def run_on(doc, obj, command):
+    """Run a command with obj selected; the objects it added."""
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(obj)
+    names = {o.Name for o in doc.Objects}
+    Gui.runCommand(command)
+    Gui.updateGui()
+    return [o for o in doc.Objects if o.Name not in names]
+
+
 def run():
     if ensure_link():
         result["restart"] = True  # FreeCAD scans the Mod folders only at start-up
@@ -91,10 +101,7 @@ def run():
     Gui.Selection.addSelection(source)
     result["active_with_selection"] = Gui.isCommandActive("Idealize_Segment")
 
-    names = {o.Name for o in doc.Objects}
-    Gui.runCommand("Idealize_Segment")
-    Gui.updateGui()
-    new = [o for o in doc.Objects if o.Name not in names]
+    new = run_on(doc, source, "Idealize_Segment")
     result["new_labels"] = [o.Label for o in new]
     result["source_after"] = counts()
     result["undo_names"] = doc.UndoNames
@@ -119,12 +126,7 @@ def run():
     result["source_visible_after_undo"] = source.ViewObject.Visibility
 
     # Segment & Idealize: a copy coloured by feature type, undone in one step.
-    Gui.Selection.clearSelection()
-    Gui.Selection.addSelection(source)
-    names = {o.Name for o in doc.Objects}
-    Gui.runCommand("Idealize_SegmentIdealize")
-    Gui.updateGui()
-    new = [o for o in doc.Objects if o.Name not in names]
+    new = run_on(doc, source, "Idealize_SegmentIdealize")
     result["idealize_labels"] = [o.Label for o in new]
     result["idealize_undo_name"] = doc.UndoNames[0] if doc.UndoNames else None
     if new:
@@ -143,6 +145,35 @@ def run():
         view.saveImage(CONFIG["screenshot_types"], 800, 600, "White")
     doc.undo()
     result["objects_after_idealize_undo"] = [o.Label for o in doc.Objects]
+
+    # Make B-rep solid: a Part solid coloured by face type and a group of primitives, one undo.
+    new = run_on(doc, source, "Idealize_MakeSolid")
+    result["solid_labels"] = sorted(o.Label for o in new)
+    result["solid_undo_name"] = doc.UndoNames[0] if doc.UndoNames else None
+    solids = [o for o in new if o.Label == "Part_Solid"]
+    if solids:
+        solid = solids[0]
+        result["solid"] = {"valid": solid.Shape.isValid(), "type": solid.Shape.ShapeType,
+                           "faces": len(solid.Shape.Faces), "volume": solid.Shape.Volume,
+                           "colors": len(solid.ViewObject.DiffuseColor), "flag": solid.IdealizeSolid}
+        group = [o for o in new if o.Label == "Part_Primitives"][0]
+        result["primitives"] = sorted(o.Shape.ShapeType for o in group.Group)
+        Gui.Selection.clearSelection()
+        source.ViewObject.Visibility = False
+        view = Gui.ActiveDocument.ActiveView
+        view.viewIsometric()
+        view.fitAll()
+        Gui.updateGui()
+        view.saveImage(CONFIG["screenshot_solid"], 800, 600, "White")
+        # Export STEP through the command, the file dialog answered by the test.
+        QtGui.QFileDialog.getSaveFileName = lambda *args, **kw: (CONFIG["step"], "")
+        Gui.Selection.addSelection(solid)
+        result["export_active"] = Gui.isCommandActive("Idealize_ExportStep")
+        Gui.runCommand("Idealize_ExportStep")
+        back = Part.read(CONFIG["step"])
+        result["step"] = {"solids": len(back.Solids), "faces": len(back.Faces), "valid": back.isValid()}
+    doc.undo()
+    result["objects_after_solid_undo"] = [o.Label for o in doc.Objects]
 
     # A mesh the core rejects: the transaction is aborted and the error is shown.
     empty = doc.addObject("Mesh::Feature", "Empty")
@@ -168,7 +199,8 @@ os._exit(0)
 def run_driver(tmp_path, attempt):
     config = {"repo": REPO, "result": str(tmp_path / ("result%d.json" % attempt)),
               "screenshot": str(tmp_path / "segment-gui.png"),
-              "screenshot_types": str(tmp_path / "idealize-gui.png")}
+              "screenshot_types": str(tmp_path / "idealize-gui.png"),
+              "screenshot_solid": str(tmp_path / "solid-gui.png"), "step": str(tmp_path / "part.step")}
     script = tmp_path / ("driver%d.py" % attempt)
     script.write_text(DRIVER.replace("__CONFIG__", repr(json.dumps(config))))
     env = dict(os.environ, QTWEBENGINE_DISABLE_SANDBOX="1")
@@ -226,6 +258,18 @@ def test_segment_command_in_freecad_gui(tmp_path):
     assert set(colors) == {"plane", "cylinder"}, colors
     assert sum(colors.values()) == result["source_before"][1]
     assert result["objects_after_idealize_undo"] == ["Part"]
+
+    # The fitted solid: 7 faces, exact volume, coloured, with 7 primitives; one undo removes all.
+    assert {"Part_Solid", "Part_Primitives"} <= set(result["solid_labels"])
+    assert result["solid_undo_name"] == "Make B-rep solid"
+    solid = result["solid"]
+    assert solid["valid"] and solid["type"] == "Solid" and solid["flag"] is True
+    assert solid["faces"] == 7 and solid["colors"] == 7
+    assert abs(solid["volume"] - (30 * 20 * 10 - 3.141592653589793 * 16 * 10)) < 1e-3 * solid["volume"]
+    assert result["primitives"].count("Face") == 6 and result["primitives"].count("Solid") == 1
+    assert result["export_active"] is True
+    assert result["step"] == {"solids": 1, "faces": 7, "valid": True}
+    assert result["objects_after_solid_undo"] == ["Part"]
 
     assert result["objects_after_error"] == ["Part", "Empty"]
     assert result["undo_added_by_error"] == 0

@@ -4,7 +4,7 @@ import time
 import FreeCAD
 import FreeCADGui
 
-from .. import freecad_mesh
+from .. import freecad_mesh, freecad_solid
 from . import icon
 
 
@@ -23,7 +23,12 @@ def _report_error(title, error):
     QtGui.QMessageBox.critical(FreeCADGui.getMainWindow(), "Idealize - " + title, message)
 
 
-def _run_on_selection(title, transaction, compute, make_result, describe):
+def _show_colored_mesh(result):
+    # Per-facet colours come from the FaceColors property; Coloring switches them on.
+    result.ViewObject.Coloring = True
+
+
+def _run_on_selection(title, transaction, compute, make_result, describe, show=_show_colored_mesh):
     """Shared body of the commands: compute on the selected mesh, add the result in one undoable
     transaction, hide the source, report; on any error abort the transaction and show it."""
     source = _selected_mesh()  # not None: FreeCAD runs commands only when IsActive()
@@ -34,9 +39,8 @@ def _run_on_selection(title, transaction, compute, make_result, describe):
         computed = compute(source)
         result = make_result(doc, source, computed)
         doc.recompute()
-        # Per-facet colours come from the FaceColors property; Coloring switches them on.
-        result.ViewObject.Coloring = True
-        # The copy lies exactly on the source: hide the source so the colours do not z-fight.
+        show(result)
+        # The result lies exactly on the source: hide the source so the colours do not z-fight.
         source.ViewObject.Visibility = False
         doc.commitTransaction()
     except Exception as error:  # anything: the document must not keep half a result
@@ -89,5 +93,72 @@ class SegmentIdealizeCommand:
                           freecad_mesh.make_feature_mesh, describe)
 
 
+class MakeSolidCommand:
+    def GetResources(self):
+        return {"Pixmap": icon("Idealize_MakeSolid"),
+                "MenuText": "Make B-rep solid",
+                "ToolTip": "Fit a solid to the selected mesh: one exact plane, cylinder, cone, sphere or torus "
+                           "face per feature, plus a group of Part primitives"}
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and _selected_mesh() is not None
+
+    def Activated(self):
+        primitives = []
+
+        def make_result(doc, source, computed):
+            layer, _ = computed
+            obj, group, _ = freecad_solid.make_solid_object(doc, source, layer)
+            primitives.extend(group.Group)
+            return obj
+
+        def show(obj):
+            obj.ViewObject.DiffuseColor = freecad_solid.face_colors(obj.Shape)
+            # The primitives lie on the solid's faces: shown, they would hide its colours.
+            for primitive in primitives:
+                primitive.ViewObject.Visibility = False
+
+        def describe(source, computed, seconds):
+            _, solid = computed
+            kinds = ", ".join("%d %s" % (n, t) for t, n in sorted(solid.surface_types.items()))
+            state = "solid" if solid.solid else "NO valid closed solid, only faces"
+            return ("Idealize: %s -> %s with %d faces (%s), volume %.6g, in %.2f s" % (
+                source.Label, state, solid.faces, kinds, solid.volume, seconds),
+                ["  feature %d: %s" % (f, m) if f >= 0 else "  %s" % m for f, m in solid.problems])
+
+        _run_on_selection("Make B-rep solid", "Make B-rep solid", freecad_solid.solid_of_mesh_object, make_result,
+                          describe, show)
+
+
+def _selected_shapes():
+    return [o for o in FreeCADGui.Selection.getSelection() if o.isDerivedFrom("Part::Feature")]
+
+
+class ExportStepCommand:
+    def GetResources(self):
+        return {"Pixmap": icon("Idealize_ExportStep"),
+                "MenuText": "Export STEP",
+                "ToolTip": "Write the selected solid (or Part objects) to a STEP file"}
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and bool(_selected_shapes())
+
+    def Activated(self):
+        from PySide import QtGui
+        objects = _selected_shapes()
+        path, _ = QtGui.QFileDialog.getSaveFileName(FreeCADGui.getMainWindow(), "Export STEP",
+                                                    objects[0].Label + ".step", "STEP (*.step *.stp)")
+        if not path:
+            return
+        try:
+            freecad_solid.export_step(objects, path)
+        except Exception as error:
+            _report_error("Export STEP", error)
+            return
+        FreeCAD.Console.PrintMessage("Idealize: %d object(s) written to %s\n" % (len(objects), path))
+
+
 FreeCADGui.addCommand("Idealize_Segment", SegmentCommand())
 FreeCADGui.addCommand("Idealize_SegmentIdealize", SegmentIdealizeCommand())
+FreeCADGui.addCommand("Idealize_MakeSolid", MakeSolidCommand())
+FreeCADGui.addCommand("Idealize_ExportStep", ExportStepCommand())

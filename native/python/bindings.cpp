@@ -1,5 +1,6 @@
 // The only place where C++ meets Python. Arrays cross as numpy: V float64 (#V, 3), F int32 (#F, 3),
 // row-major. Long computations release the GIL; C++ exceptions become Python exceptions.
+#include "brep_builder.h"
 #include "curvature.h"
 #include "feature_layer.h"
 #include "mesh.h"
@@ -102,6 +103,42 @@ py::dict surface_params(const Surface& s) {
     case SurfaceType::Freeform: break;
   }
   return d;
+}
+
+Eigen::Vector3d vector3(const py::dict& params, const char* key) {
+  if (!params.contains(key)) throw std::invalid_argument(std::string("surface parameters lack '") + key + "'");
+  const auto v = params[key].cast<std::vector<double>>();
+  if (v.size() != 3) throw std::invalid_argument(std::string("surface parameter '") + key + "' needs 3 values");
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+double scalar(const py::dict& params, const char* key) {
+  if (!params.contains(key)) throw std::invalid_argument(std::string("surface parameters lack '") + key + "'");
+  return params[key].cast<double>();
+}
+
+// The inverse of surface_params: a surface from the report's type name and parameters.
+Surface surface_from_params(const std::string& type, const py::dict& params) {
+  Surface s;
+  if (type == "plane") {
+    s.type = SurfaceType::Plane; s.axis = vector3(params, "normal").normalized(); s.point = vector3(params, "point");
+  } else if (type == "cylinder") {
+    s.type = SurfaceType::Cylinder; s.axis = vector3(params, "axis").normalized(); s.point = vector3(params, "point");
+    s.radius = scalar(params, "radius");
+  } else if (type == "cone") {
+    s.type = SurfaceType::Cone; s.axis = vector3(params, "axis").normalized(); s.point = vector3(params, "apex");
+    s.half_angle = scalar(params, "half_angle");
+  } else if (type == "sphere") {
+    s.type = SurfaceType::Sphere; s.point = vector3(params, "center"); s.radius = scalar(params, "radius");
+  } else if (type == "torus") {
+    s.type = SurfaceType::Torus; s.axis = vector3(params, "axis").normalized(); s.point = vector3(params, "center");
+    s.radius = scalar(params, "major"); s.minor = scalar(params, "minor");
+  } else if (type != "freeform") {
+    throw std::invalid_argument("unknown surface type '" + type + "'");
+  }
+  if (!s.point.allFinite() || !s.axis.allFinite() || !std::isfinite(s.radius) || !std::isfinite(s.minor))
+    throw std::invalid_argument("a " + type + " has a NaN or infinite parameter");
+  return s;
 }
 
 py::dict feature_layer_dict(FeatureLayer&& layer) {
@@ -211,6 +248,82 @@ PYBIND11_MODULE(_native, m) {
       },
       py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("patch_mean"), py::arg("patch_gaussian"),
       py::arg("zero_low"), py::arg("zero_high"), "Feature identification, graph and projection (thesis ch. 4).");
+
+  py::class_<BrepResult>(m, "Brep", "A fitted B-rep: solid, or the shell of the faces that could be made.")
+      .def_readonly("valid", &BrepResult::valid)
+      .def_readonly("closed", &BrepResult::closed)
+      .def_readonly("solid", &BrepResult::solid)
+      .def_readonly("faces", &BrepResult::faces)
+      .def_readonly("volume", &BrepResult::volume)
+      .def_readonly("surface_types", &BrepResult::surface_types)
+      .def_readonly("face_features", &BrepResult::face_features)
+      .def_readonly("timings", &BrepResult::timings)
+      .def_property_readonly("edges", [](const BrepResult& r) {
+        py::list edges;
+        for (const BrepEdge& e : r.edges) {
+          py::dict d;
+          d["a"] = e.a; d["b"] = e.b; d["mesh_vertices"] = e.mesh_vertices; d["closed"] = e.closed; d["curve"] = e.curve;
+          edges.append(d);
+        }
+        return edges;
+      })
+      .def_property_readonly("problems", [](const BrepResult& r) {
+        py::list problems;
+        for (const BrepProblem& p : r.problems) problems.append(py::make_tuple(p.feature, p.message));
+        return problems;
+      })
+      .def("brep_string", [](const BrepResult& r) { return py::bytes(brep_string(r.shape)); },
+           "The shape in OCCT BRep text format (Part.Shape().importBrepFromString).")
+      .def(
+          "write_step",
+          [](const BrepResult& r, const std::string& path) {
+            py::gil_scoped_release release;
+            write_step(r.shape, path);
+          },
+          py::arg("path"), "Write STEP AP214 in millimetres, faces coloured by surface type.")
+      .def(
+          "triangulate",
+          [](const BrepResult& r, double deflection) {
+            if (!(deflection > 0)) throw std::invalid_argument("deflection must be positive");
+            TriangleMesh mesh;
+            {
+              py::gil_scoped_release release;
+              mesh = triangulate(r.shape, deflection);
+            }
+            return py::make_tuple(std::move(mesh.V), std::move(mesh.F));
+          },
+          py::arg("deflection"), "Triangulation (V, F) with chordal deviation at most `deflection`.");
+
+  m.def(
+      "build_brep",
+      [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, std::vector<int> labels,
+         const std::vector<std::string>& types, const std::vector<py::dict>& params, double tolerance) {
+        if (types.size() != params.size()) throw std::invalid_argument("one type and one parameter set per feature");
+        std::vector<Surface> surfaces;
+        for (size_t i = 0; i < types.size(); ++i) surfaces.push_back(surface_from_params(types[i], params[i]));
+        const TriangleMesh mesh = make_mesh(V, F);
+        BrepOptions options;
+        options.tolerance = tolerance;
+        py::gil_scoped_release release;
+        return build_brep(mesh, labels, surfaces, options);
+      },
+      py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("tolerance") = 0.0,
+      "Fitted B-rep of a labelled mesh whose features lie on the given surfaces.");
+
+  m.def(
+      "mesh_distances",
+      [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F,
+         const Eigen::Ref<const MatrixX3d>& points) {
+        const TriangleMesh mesh = make_mesh(V, F);
+        const MatrixX3d query = points;
+        std::vector<double> distances;
+        {
+          py::gil_scoped_release release;
+          closest_faces(mesh, query, &distances);
+        }
+        return Eigen::Map<const Eigen::VectorXd>(distances.data(), static_cast<Eigen::Index>(distances.size())).eval();
+      },
+      py::arg("V"), py::arg("F"), py::arg("points"), "Distance of each point from the mesh (AABB tree).");
 
   m.def(
       "fit_surface",

@@ -224,7 +224,7 @@ TriangleMesh remesh_isotropic(const TriangleMesh& mesh, double target_edge_lengt
   return from_surface_mesh(sm);
 }
 
-std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points) {
+std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points, std::vector<double>* distances) {
   check_indexed_mesh(mesh, "closest faces");
   for (Eigen::Index i = 0; i < points.rows(); ++i)
     for (int c = 0; c < 3; ++c)
@@ -266,10 +266,12 @@ std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points
   tree.accelerate_distance_queries();
 
   std::vector<int> result(static_cast<std::size_t>(points.rows()));
+  if (distances) distances->resize(result.size());
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
     const Point q(points(i, 0), points(i, 1), points(i, 2));
     const auto hit = tree.closest_point_and_primitive(q);
     result[static_cast<std::size_t>(i)] = face_row[static_cast<std::size_t>(hit.second)];
+    if (distances) (*distances)[static_cast<std::size_t>(i)] = std::sqrt(CGAL::squared_distance(q, hit.first));
   }
   return result;
 }

@@ -17,7 +17,9 @@ namespace idealize {
 // throws MeshError otherwise.
 TriangleMesh remesh_isotropic(const TriangleMesh& mesh, double target_edge_length, int iterations);
 
-// Index of the face of `mesh` closest to each row of `points` (#P x 3), via an AABB tree.
-std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points);
+// Index of the face of `mesh` closest to each row of `points` (#P x 3), via an AABB tree; with
+// `distances`, also the distance of each point from the mesh.
+std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points,
+                               std::vector<double>* distances = nullptr);
 
 }  // namespace idealize

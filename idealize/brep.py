@@ -1,0 +1,102 @@
+"""The fitted B-rep of a feature layer: analytic faces trimmed by the intersections of adjacent
+ideal surfaces, one solid when they close (native/src/brep_builder.h)."""
+import time
+
+import numpy as np
+
+from ._loader import native
+
+
+class Solid:
+    """Result of :func:`make_solid`.
+
+    valid: OpenCASCADE's checker accepts the shape. closed: no free edges. solid: a valid closed
+    solid (otherwise `shape` holds only the faces that could be made, as a shell or compound).
+    faces, volume (0 unless solid), surface_types: face count per type. problems: list of
+    (feature id or -1, message) for what failed. face_features: the feature of each face.
+    max_deviation: largest distance from the input mesh vertices to the shape's faces.
+    """
+
+    def __init__(self, brep, layer, max_deviation, deflection, timings):
+        self._brep = brep
+        self.layer = layer
+        self.valid = brep.valid
+        self.closed = brep.closed
+        self.solid = brep.solid
+        self.faces = brep.faces
+        self.volume = brep.volume
+        self.surface_types = dict(brep.surface_types)
+        self.problems = list(brep.problems)
+        self.face_features = list(brep.face_features)
+        self.max_deviation = max_deviation
+        self.deviation_deflection = deflection
+        self.timings = timings
+
+    def failed_features(self):
+        """Ids of the features named in the problems."""
+        return sorted({feature for feature, _ in self.problems if feature >= 0})
+
+    def brep_string(self):
+        """The shape as OCCT BRep text (bytes)."""
+        return self._brep.brep_string()
+
+    def write_step(self, path):
+        """Write the shape to a STEP file (AP214, millimetres, faces coloured by type)."""
+        self._brep.write_step(str(path))
+
+    def triangulate(self, deflection):
+        """(V, F) triangulation of the faces with chordal deviation at most `deflection`."""
+        return self._brep.triangulate(float(deflection))
+
+    def part_shape(self):
+        """The shape as a FreeCAD ``Part.Shape`` (needs FreeCAD)."""
+        import FreeCAD  # noqa: F401  (FreeCAD before Part)
+        import Part
+        shape = Part.Shape()
+        shape.importBrepFromString(self.brep_string().decode("ascii"), False)
+        return shape
+
+    def report(self):
+        """The report's "brep" entry."""
+        return {
+            "valid": bool(self.valid),
+            "closed": bool(self.closed),
+            "solid": bool(self.solid),
+            "faces": int(self.faces),
+            "volume": float(self.volume),
+            "surface_types": {k: int(v) for k, v in sorted(self.surface_types.items())},
+            "max_deviation": float(self.max_deviation),
+            "problems": [{"feature": int(f), "message": m} for f, m in self.problems],
+        }
+
+    def __repr__(self):
+        kinds = ", ".join("%d %s" % (n, t) for t, n in sorted(self.surface_types.items()))
+        state = "solid" if self.solid else ("invalid" if not self.valid else "open shell")
+        return "<idealize.Solid %s, %d faces (%s), volume %.6g>" % (state, self.faces, kinds, self.volume)
+
+
+def make_solid(layer, tolerance=None):
+    """Build the fitted B-rep of a :class:`idealize.FeatureLayer`.
+
+    tolerance: distance below which geometry is equal; default the layer's distance tolerance.
+    """
+    mesh = layer.mesh
+    tolerance = layer.distance_tolerance if tolerance is None else float(tolerance)
+    if not tolerance > 0:
+        raise ValueError("the tolerance must be positive")
+    start = time.perf_counter()
+    types = [f["type"] for f in layer.features]
+    params = [dict(f["params"]) for f in layer.features]
+    brep = native.build_brep(mesh.vertices, mesh.faces, np.asarray(layer.labels, dtype=np.int32),
+                             types, params, tolerance)
+    timings = dict(brep.timings)
+    timings["brep"] = time.perf_counter() - start
+    start = time.perf_counter()
+    deflection = 0.1 * tolerance
+    max_deviation = float("nan")
+    if brep.faces:
+        V, F = brep.triangulate(deflection)
+        if len(F):
+            max_deviation = float(np.max(native.mesh_distances(V, F, mesh.vertices)))
+    timings["brep.deviation"] = time.perf_counter() - start
+    return Solid(brep, layer, max_deviation, deflection, timings)

@@ -1,0 +1,119 @@
+"""Fitted solids and Part primitives in a FreeCAD document, without any GUI.
+
+Works in freecadcmd and in the GUI; the GUI commands (idealize.gui) add undo and display.
+"""
+import numpy as np
+
+from .brep import make_solid
+from .freecad_mesh import SURFACE_COLORS, idealize_mesh_object
+
+# Surface type of a Part face -> the type names of the feature layer.
+PART_SURFACE_TYPES = {"Plane": "plane", "Cylinder": "cylinder", "Cone": "cone", "Sphere": "sphere",
+                      "Toroid": "torus"}
+
+
+def solid_of_mesh_object(obj, layer=None):
+    """(:class:`idealize.FeatureLayer`, :class:`idealize.Solid`) of a Mesh::Feature or Mesh.Mesh."""
+    if layer is None:
+        layer = idealize_mesh_object(obj)
+    return layer, make_solid(layer)
+
+
+def _vector(values):
+    import FreeCAD
+    return FreeCAD.Vector(*[float(v) for v in values])
+
+
+def _frame(axis):
+    axis = np.asarray(axis, dtype=np.float64)
+    axis = axis / np.linalg.norm(axis)
+    helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
+    x = np.cross(axis, helper)
+    x /= np.linalg.norm(x)
+    return axis, x, np.cross(axis, x)
+
+
+def primitive_shape(feature, points):
+    """A Part shape for one feature, sized to cover its patch's `points` (n, 3): a plane face
+    over the patch's extent, a cylinder or cone between its extreme heights along the axis, a
+    whole sphere or torus. None for freeform features."""
+    import FreeCAD  # noqa: F401  (FreeCAD before Part)
+    import Part
+    kind, p = feature["type"], feature["params"]
+    if kind == "plane":
+        normal, x, y = _frame(p["normal"])
+        origin = np.asarray(p["point"], dtype=np.float64)
+        u, v = (points - origin) @ x, (points - origin) @ y
+        corner = origin + u.min() * x + v.min() * y
+        return Part.makePlane(float(np.ptp(u)) or 1e-6, float(np.ptp(v)) or 1e-6, _vector(corner), _vector(normal),
+                              _vector(x))
+    if kind in ("cylinder", "cone"):
+        axis = _frame(p["axis"])[0]
+        origin = np.asarray(p["point"] if kind == "cylinder" else p["apex"], dtype=np.float64)
+        h = (points - origin) @ axis
+        low, high = float(h.min()), float(h.max())
+        base = _vector(origin + low * axis)
+        if kind == "cylinder":
+            return Part.makeCylinder(float(p["radius"]), max(high - low, 1e-6), base, _vector(axis))
+        t = np.tan(float(p["half_angle"]))
+        return Part.makeCone(max(low, 0.0) * t, max(high, 0.0) * t, max(high - low, 1e-6), base, _vector(axis))
+    if kind == "sphere":
+        return Part.makeSphere(float(p["radius"]), _vector(p["center"]))
+    if kind == "torus":
+        return Part.makeTorus(float(p["major"]), float(p["minor"]), _vector(p["center"]), _vector(p["axis"]))
+    return None
+
+
+def make_primitives(doc, source_obj, layer, name=None):
+    """Add an App::DocumentObjectGroup "<Label>_Primitives" holding one Part::Feature per
+    analytic feature (named "F<id>_<type>"), placed and sized by the idealized parameters."""
+    mesh = layer.mesh
+    labels = np.asarray(layer.labels)
+    group = doc.addObject("App::DocumentObjectGroup", (name or source_obj.Name) + "_Primitives")
+    group.Label = source_obj.Label + "_Primitives"
+    for feature in layer.features:
+        faces = mesh.faces[labels == feature["id"]]
+        if not len(faces):
+            continue
+        shape = primitive_shape(feature, mesh.vertices[np.unique(faces)])
+        if shape is None:
+            continue
+        obj = doc.addObject("Part::Feature", "F%d_%s" % (feature["id"], feature["type"]))
+        obj.Shape = shape
+        group.addObject(obj)
+    return group
+
+
+def make_solid_object(doc, source_obj, layer=None, with_primitives=True):
+    """Add a Part::Feature "<Label>_Solid" with the fitted B-rep of source_obj (a Mesh::Feature)
+    and, with_primitives, a group of Part primitives. source_obj is not modified.
+
+    Returns (solid object, primitives group or None, :class:`idealize.Solid`). The shape is a
+    valid solid, or, when the faces do not close, the faces that could be made (the object's
+    IdealizeProblems property lists why). Callers wrap this in a document transaction.
+    """
+    layer, solid = solid_of_mesh_object(source_obj, layer)
+    obj = doc.addObject("Part::Feature", source_obj.Name + "_Solid")
+    obj.Label = source_obj.Label + "_Solid"
+    obj.Shape = solid.part_shape()
+    obj.addProperty("App::PropertyBool", "IdealizeSolid", "Idealize", "True: a valid closed solid")
+    obj.addProperty("App::PropertyStringList", "IdealizeProblems", "Idealize", "What failed, per feature")
+    obj.IdealizeSolid = bool(solid.solid)
+    obj.IdealizeProblems = [("feature %d: " % f if f >= 0 else "") + m for f, m in solid.problems]
+    group = make_primitives(doc, source_obj, layer) if with_primitives else None
+    return obj, group, solid
+
+
+def face_colors(shape):
+    """Per-face RGB of a Part shape in the thesis colours of its surface types."""
+    return [SURFACE_COLORS.get(PART_SURFACE_TYPES.get(type(face.Surface).__name__, "freeform"))
+            for face in shape.Faces]
+
+
+def export_step(objects, path):
+    """Write the shapes of Part objects to a STEP file (FreeCAD's exporter, with colours)."""
+    import FreeCAD  # noqa: F401
+    import Import
+    if not objects:
+        raise ValueError("nothing to export")
+    Import.export(list(objects), str(path))

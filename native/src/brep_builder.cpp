@@ -1,0 +1,943 @@
+#include "brep_builder.h"
+
+#include "brep_topology.h"
+#include "occt_signals.h"
+
+#include <BRepAdaptor_Surface.hxx>
+#include <BRepBuilderAPI_Sewing.hxx>
+#include <BRepCheck_Analyzer.hxx>
+#include <BRepGProp.hxx>
+#include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
+#include <ElCLib.hxx>
+#include <GProp_GProps.hxx>
+#include <GeomAPI_IntSS.hxx>
+#include <GeomAPI_PointsToBSpline.hxx>
+#include <GeomAPI_ProjectPointOnCurve.hxx>
+#include <Geom_BSplineCurve.hxx>
+#include <Geom_Circle.hxx>
+#include <Geom_ConicalSurface.hxx>
+#include <Geom_CylindricalSurface.hxx>
+#include <Geom_Line.hxx>
+#include <Geom_Plane.hxx>
+#include <Geom_SphericalSurface.hxx>
+#include <Geom_ToroidalSurface.hxx>
+#include <Precision.hxx>
+#include <ShapeFix_Edge.hxx>
+#include <ShapeFix_Face.hxx>
+#include <ShapeFix_Shell.hxx>
+#include <ShapeFix_Wire.hxx>
+#include <ShapeFix_Shape.hxx>
+#include <ShapeFix_Solid.hxx>
+#include <ShapeUpgrade_UnifySameDomain.hxx>
+#include <Standard_Failure.hxx>
+#include <TColgp_Array1OfPnt.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <TopoDS_Shell.hxx>
+#include <TopoDS_Solid.hxx>
+#include <TopoDS_Vertex.hxx>
+#include <TopoDS_Wire.hxx>
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <chrono>
+#include <functional>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <set>
+
+namespace idealize {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using Vec2 = Eigen::Vector2d;
+
+gp_Pnt to_pnt(const Vec3& v) { return gp_Pnt(v.x(), v.y(), v.z()); }
+gp_Dir to_dir(const Vec3& v) { return gp_Dir(v.x(), v.y(), v.z()); }
+Vec3 to_vec(const gp_Pnt& p) { return Vec3(p.X(), p.Y(), p.Z()); }
+
+std::string occt_message(const Standard_Failure& failure, const char* what) {
+  const char* text = failure.GetMessageString();
+  return std::string(what) + ((text && *text) ? std::string(": ") + text : std::string(" (OpenCASCADE failure)"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Surfaces
+
+// A unit vector orthogonal to `axis`, pointing from the axis towards -mean of the points' radial
+// directions: the parametric seam (u = 0) of a revolved surface then lies opposite to its face.
+Vec3 seam_direction(const Vec3& axis, const Vec3& mean_radial) {
+  Vec3 x = -(mean_radial - mean_radial.dot(axis) * axis);
+  if (x.norm() < 1e-9) {
+    Vec3 e2;
+    orthonormal_frame(axis, x, e2);
+  }
+  return x.normalized();
+}
+
+Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& points) {
+  Vec3 radial = Vec3::Zero();
+  double height = 0.0;
+  for (const Vec3& p : points) {
+    const Vec3 q = p - s.point;
+    const double h = q.dot(s.axis);
+    height += h;
+    const Vec3 r = q - h * s.axis;
+    if (r.norm() > 0) radial += r.normalized();
+  }
+  if (!points.empty()) height /= static_cast<double>(points.size());
+  switch (s.type) {
+    case SurfaceType::Plane: {
+      Vec3 x, y;
+      orthonormal_frame(s.axis, x, y);
+      return new Geom_Plane(gp_Ax3(to_pnt(s.point), to_dir(s.axis), to_dir(x)));
+    }
+    case SurfaceType::Cylinder:
+      return new Geom_CylindricalSurface(gp_Ax3(to_pnt(s.point), to_dir(s.axis), to_dir(seam_direction(s.axis, radial))),
+                                         s.radius);
+    case SurfaceType::Cone: {
+      // OCCT places a cone by a reference circle: take it at the face's mean height.
+      const double h = std::max(height, 1e-6);
+      return new Geom_ConicalSurface(gp_Ax3(to_pnt(s.point + h * s.axis), to_dir(s.axis),
+                                            to_dir(seam_direction(s.axis, radial))),
+                                     s.half_angle, h * std::tan(s.half_angle));
+    }
+    case SurfaceType::Sphere: {
+      // Poles away from the face: the polar axis orthogonal to the face's mean direction.
+      Vec3 mean = Vec3::Zero();
+      for (const Vec3& p : points) mean += (p - s.point).normalized();
+      Vec3 x = mean.norm() > 1e-9 ? Vec3(-mean.normalized()) : Vec3::UnitX();
+      Vec3 z, unused;
+      orthonormal_frame(x, z, unused);
+      return new Geom_SphericalSurface(gp_Ax3(to_pnt(s.point), to_dir(z), to_dir(x)), s.radius);
+    }
+    case SurfaceType::Torus:
+      return new Geom_ToroidalSurface(gp_Ax3(to_pnt(s.point), to_dir(s.axis), to_dir(seam_direction(s.axis, radial))),
+                                      s.radius, s.minor);
+    case SurfaceType::Freeform:
+      break;
+  }
+  return nullptr;
+}
+
+bool same_surface(const Surface& a, const Surface& b, double tol) {
+  if (a.type != b.type || a.type == SurfaceType::Freeform) return false;
+  if (std::abs(a.radius - b.radius) > tol || std::abs(a.minor - b.minor) > tol) return false;
+  if (std::abs(a.half_angle - b.half_angle) > 1e-9) return false;
+  if (a.type == SurfaceType::Sphere) return (a.point - b.point).norm() <= tol;
+  if (a.axis.cross(b.axis).norm() > 1e-9) return false;
+  const Vec3 d = b.point - a.point;
+  if (a.type == SurfaceType::Plane) return std::abs(d.dot(a.axis)) <= tol;
+  if (a.type == SurfaceType::Cylinder) return (d - d.dot(a.axis) * a.axis).norm() <= tol;
+  return d.norm() <= tol && a.axis.dot(b.axis) > 0;  // cone apex, torus centre
+}
+
+// ---------------------------------------------------------------------------------------------
+// Intersection curves in closed form
+
+// A line or circle in a plane: meridian (rho, h) of a surface of revolution, or cross-section of a
+// surface along parallel axes.
+struct Primitive2 {
+  bool circle = false;
+  Vec2 p = Vec2::Zero();  // point on the line, or centre
+  Vec2 d = Vec2::UnitX(); // unit direction of a line
+  double r = 0.0;
+};
+
+Primitive2 line2(const Vec2& p, const Vec2& d) { return {false, p, d.normalized(), 0.0}; }
+Primitive2 circle2(const Vec2& c, double r) { return {true, c, Vec2::UnitX(), r}; }
+
+double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// Intersection points; tangent primitives (within `tol`) meet in their point of contact.
+std::vector<Vec2> intersect(const Primitive2& a, const Primitive2& b, double tol) {
+  if (a.circle && !b.circle) return intersect(b, a, tol);
+  if (!a.circle && !b.circle) {
+    const double det = cross2(a.d, b.d);
+    if (std::abs(det) < 1e-12) return {};
+    const double t = cross2(b.p - a.p, b.d) / det;
+    return {a.p + t * a.d};
+  }
+  if (!a.circle) {  // line a, circle b
+    const Vec2 foot = a.p + (b.p - a.p).dot(a.d) * a.d;
+    const double dist = (b.p - foot).norm();
+    if (dist > b.r + tol) return {};
+    if (dist >= b.r - 1e-9 * std::max(1.0, b.r)) return {foot};
+    const double h = std::sqrt(b.r * b.r - dist * dist);
+    return {foot + h * a.d, foot - h * a.d};
+  }
+  const Vec2 between = b.p - a.p;
+  const double d = between.norm();
+  if (d < 1e-12 || d > a.r + b.r + tol || d < std::abs(a.r - b.r) - tol) return {};
+  const Vec2 u = between / d;
+  const double along = (a.r * a.r - b.r * b.r + d * d) / (2 * d);
+  const double h2 = a.r * a.r - along * along;
+  if (h2 <= 1e-18 * std::max(1.0, a.r * a.r)) return {a.p + along * u};
+  const double h = std::sqrt(h2);
+  const Vec2 n(-u.y(), u.x());
+  return {a.p + along * u + h * n, a.p + along * u - h * n};
+}
+
+// The meridian of `s` about the axis (o, a) when `s` is a surface of revolution about it.
+std::optional<Primitive2> meridian(const Surface& s, const Vec3& o, const Vec3& a, double angle_eps, double tol) {
+  const Vec3 d = s.point - o;
+  const double h = d.dot(a);
+  const double off_axis = (d - h * a).norm();
+  const bool parallel = s.has_direction() && s.axis.cross(a).norm() <= angle_eps;
+  switch (s.type) {
+    case SurfaceType::Plane:
+      if (parallel) return line2(Vec2(0, h), Vec2(1, 0));
+      break;
+    case SurfaceType::Cylinder:
+      if (parallel && off_axis <= tol) return line2(Vec2(s.radius, 0), Vec2(0, 1));
+      break;
+    case SurfaceType::Cone:
+      if (parallel && off_axis <= tol) {
+        const double sense = s.axis.dot(a) > 0 ? 1.0 : -1.0;
+        return line2(Vec2(0, h), Vec2(std::sin(s.half_angle), sense * std::cos(s.half_angle)));
+      }
+      break;
+    case SurfaceType::Sphere:
+      if (off_axis <= tol) return circle2(Vec2(0, h), s.radius);
+      break;
+    case SurfaceType::Torus:
+      if (parallel && off_axis <= tol) return circle2(Vec2(s.radius, h), s.minor);
+      break;
+    case SurfaceType::Freeform:
+      break;
+  }
+  return std::nullopt;
+}
+
+// The common axis of two surfaces that may be coaxial surfaces of revolution.
+bool common_axis(const Surface& a, const Surface& b, Vec3& o, Vec3& axis) {
+  const bool a_round = a.type != SurfaceType::Plane, b_round = b.type != SurfaceType::Plane;
+  if (!a_round && !b_round) return false;
+  const Surface& round = a_round ? a : b;
+  const Surface& other = a_round ? b : a;
+  o = round.point;
+  if (round.type != SurfaceType::Sphere) {
+    axis = round.axis;
+  } else if (other.type == SurfaceType::Sphere) {
+    axis = other.point - round.point;
+    if (axis.norm() < 1e-12) return false;
+    axis.normalize();
+  } else {
+    axis = other.axis;  // plane normal, or the other surface's axis through the centre
+  }
+  return true;
+}
+
+// Median of the points' coordinates in a 2D map (robust reference for choosing a branch).
+template <class Map>
+Vec2 median_2d(const std::vector<Vec3>& points, Map map) {
+  std::vector<double> xs, ys;
+  for (const Vec3& p : points) {
+    const Vec2 q = map(p);
+    xs.push_back(q.x());
+    ys.push_back(q.y());
+  }
+  std::nth_element(xs.begin(), xs.begin() + xs.size() / 2, xs.end());
+  std::nth_element(ys.begin(), ys.begin() + ys.size() / 2, ys.end());
+  return Vec2(xs[xs.size() / 2], ys[ys.size() / 2]);
+}
+
+Vec2 nearest(const std::vector<Vec2>& candidates, const Vec2& reference) {
+  return *std::min_element(candidates.begin(), candidates.end(), [&](const Vec2& x, const Vec2& y) {
+    return (x - reference).squaredNorm() < (y - reference).squaredNorm();
+  });
+}
+
+Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const std::vector<Vec3>& points,
+                                     double angle_eps, double tol) {
+  if (a.type == SurfaceType::Plane && b.type == SurfaceType::Plane) {
+    const Vec3 dir = a.axis.cross(b.axis);
+    if (dir.norm() < angle_eps) return nullptr;
+    // The point of both planes nearest to the chain's centre.
+    Vec3 centre = Vec3::Zero();
+    for (const Vec3& p : points) centre += p;
+    centre /= static_cast<double>(points.size());
+    Eigen::Matrix2d m;
+    m << a.axis.dot(a.axis), a.axis.dot(b.axis), b.axis.dot(a.axis), b.axis.dot(b.axis);
+    const Vec2 rhs(a.axis.dot(a.point - centre), b.axis.dot(b.point - centre));
+    const Vec2 ab = m.ldlt().solve(rhs);
+    return new Geom_Line(to_pnt(centre + ab.x() * a.axis + ab.y() * b.axis), to_dir(dir));
+  }
+  Vec3 o, axis;
+  if (common_axis(a, b, o, axis)) {
+    const auto ma = meridian(a, o, axis, angle_eps, tol), mb = meridian(b, o, axis, angle_eps, tol);
+    if (ma && mb) {
+      const auto rho_h = [&](const Vec3& p) {
+        const double h = (p - o).dot(axis);
+        return Vec2((p - o - h * axis).norm(), h);
+      };
+      std::vector<Vec2> hits = intersect(*ma, *mb, tol);
+      hits.erase(std::remove_if(hits.begin(), hits.end(), [&](const Vec2& q) { return q.x() <= tol; }), hits.end());
+      if (hits.empty()) return nullptr;
+      const Vec2 hit = nearest(hits, median_2d(points, rho_h));
+      Vec3 x = Vec3::Zero();
+      for (const Vec3& p : points) x += p - o - (p - o).dot(axis) * axis;
+      return new Geom_Circle(gp_Ax2(to_pnt(o + hit.y() * axis), to_dir(axis), to_dir(seam_direction(axis, x))), hit.x());
+    }
+  }
+  // Surfaces along parallel axes (a plane parallel to a cylinder's axis, two parallel cylinders)
+  // meet in lines along the axis.
+  const bool a_cyl = a.type == SurfaceType::Cylinder, b_cyl = b.type == SurfaceType::Cylinder;
+  if ((a_cyl && (b_cyl || b.type == SurfaceType::Plane)) || (b_cyl && a.type == SurfaceType::Plane)) {
+    const Surface& cyl = a_cyl ? a : b;
+    const Surface& other = a_cyl ? b : a;
+    const Vec3 dir = cyl.axis;
+    const bool parallel = other.type == SurfaceType::Plane ? std::abs(other.axis.dot(dir)) <= angle_eps
+                                                           : other.axis.cross(dir).norm() <= angle_eps;
+    if (!parallel) return nullptr;
+    Vec3 e1, e2;
+    orthonormal_frame(dir, e1, e2);
+    const Vec3 o2 = cyl.point;
+    const auto section = [&](const Vec3& p) { return Vec2((p - o2).dot(e1), (p - o2).dot(e2)); };
+    Primitive2 second;
+    if (other.type == SurfaceType::Plane) {
+      const Vec2 n(other.axis.dot(e1), other.axis.dot(e2));
+      const double offset = other.axis.dot(other.point - o2);
+      second = line2(offset * n / n.squaredNorm(), Vec2(-n.y(), n.x()));
+    } else {
+      second = circle2(section(other.point), other.radius);
+    }
+    const std::vector<Vec2> hits = intersect(circle2(Vec2::Zero(), cyl.radius), second, tol);
+    if (hits.empty()) return nullptr;
+    const Vec2 hit = nearest(hits, median_2d(points, section));
+    return new Geom_Line(to_pnt(o2 + hit.x() * e1 + hit.y() * e2), to_dir(dir));
+  }
+  return nullptr;
+}
+
+// The parameter of the point of `curve` closest to p; the nearer end of a bounded curve when p
+// projects beyond it.
+double curve_parameter(const Handle(Geom_Curve)& curve, const Vec3& p) {
+  GeomAPI_ProjectPointOnCurve projection(to_pnt(p), curve);
+  const double first = curve->FirstParameter(), last = curve->LastParameter();
+  double best = std::numeric_limits<double>::infinity(), parameter = first;
+  if (projection.NbPoints() > 0) {
+    best = projection.LowerDistance();
+    parameter = projection.LowerDistanceParameter();
+  }
+  for (double end : {first, last}) {
+    if (Precision::IsInfinite(end)) continue;
+    const double distance = (to_vec(curve->Value(end)) - p).norm();
+    if (distance < best) {
+      best = distance;
+      parameter = end;
+    }
+  }
+  return parameter;
+}
+
+// sin(5 degrees): directions this close count as parallel when an exact closed form is not found
+// (the feature graph's parallel tolerance).
+constexpr double kNearlyParallel = 0.0872;
+
+double max_distance_to_curve(const Handle(Geom_Curve)& curve, const std::vector<Vec3>& points) {
+  double worst = 0.0;
+  const size_t step = std::max<size_t>(1, points.size() / 16);
+  for (size_t i = 0; i < points.size(); i += step) {
+    GeomAPI_ProjectPointOnCurve projection(to_pnt(points[i]), curve);
+    if (projection.NbPoints() == 0) return std::numeric_limits<double>::infinity();
+    worst = std::max(worst, projection.LowerDistance());
+  }
+  return worst;
+}
+
+Handle(Geom_Curve) fitted_curve(const std::vector<Vec3>& points, double tol) {
+  std::vector<Vec3> kept;
+  const size_t step = std::max<size_t>(1, points.size() / 64);
+  for (size_t i = 0; i < points.size(); i += step) {
+    if (kept.empty() || (points[i] - kept.back()).norm() > 0.1 * tol) kept.push_back(points[i]);
+  }
+  if ((points.back() - kept.back()).norm() > 0.1 * tol) kept.push_back(points.back());
+  else kept.back() = points.back();
+  if (kept.size() < 2) return nullptr;
+  if (kept.size() == 2) return new Geom_Line(to_pnt(kept[0]), to_dir((kept[1] - kept[0]).normalized()));
+  TColgp_Array1OfPnt array(1, static_cast<int>(kept.size()));
+  for (size_t i = 0; i < kept.size(); ++i) array.SetValue(static_cast<int>(i) + 1, to_pnt(kept[i]));
+  GeomAPI_PointsToBSpline fit(array, 3, 8, GeomAbs_C2, tol);
+  if (!fit.IsDone()) return nullptr;
+  return Handle(Geom_Curve)(fit.Curve());
+}
+
+// The points of a chain moved onto the intersection of the two surfaces (alternating projections).
+std::vector<Vec3> project_on_both(const std::vector<Vec3>& chain, const Surface& a, const Surface* b) {
+  std::vector<Vec3> result(chain);
+  for (Vec3& p : result) {
+    for (int i = 0; i < (b ? 12 : 1); ++i) {
+      p = closest_point(a, p);
+      if (b) p = closest_point(*b, p);
+    }
+  }
+  return result;
+}
+
+// Whether two surfaces meet tangentially along a curve of both (the median angle between their
+// normals at the points' nearest curve points below 5 degrees, the feature graph's G1 criterion).
+bool tangent_along(const Handle(Geom_Curve)& curve, const Surface& a, const Surface& b, const std::vector<Vec3>& points) {
+  std::vector<double> angles;
+  const size_t step = std::max<size_t>(1, points.size() / 16);
+  for (size_t i = 0; i < points.size(); i += step) {
+    const Vec3 p = to_vec(curve->Value(curve_parameter(curve, points[i])));
+    const double c = std::abs(surface_normal(a, p).dot(surface_normal(b, p)));
+    angles.push_back(std::acos(std::min(1.0, c)));
+  }
+  std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
+  return angles[angles.size() / 2] < 5.0 * M_PI / 180.0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Corners
+
+// The point closest (least squares) to all surfaces, starting from x0 (damped Gauss-Newton: the
+// damping keeps the point near the mesh where tangent surfaces leave a direction free).
+Vec3 corner_point(const std::vector<const Surface*>& surfaces, const Vec3& x0, double tol) {
+  Vec3 x = x0;
+  const double damping = 1e-6;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    Eigen::Matrix3d normal = damping * Eigen::Matrix3d::Identity();
+    Vec3 rhs = -damping * (x - x0);
+    for (const Surface* s : surfaces) {
+      const Vec3 n = surface_normal(*s, x);
+      const double d = signed_distance(*s, x);
+      normal += n * n.transpose();
+      rhs -= n * d;
+    }
+    const Vec3 step = normal.ldlt().solve(rhs);
+    x += step;
+    if (step.norm() < 1e-3 * tol) break;
+  }
+  return x;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The builder
+
+class BrepBuilder {
+ public:
+  BrepBuilder(const TriangleMesh& mesh, const std::vector<Surface>& surfaces, const BrepOptions& options)
+      : mesh_(mesh), surfaces_(surfaces) {
+    diagonal_ = bounding_box_diagonal(mesh);
+    tol_ = options.tolerance > 0 ? options.tolerance : 1e-3 * diagonal_;
+    angle_eps_ = std::max(1e-9, tol_ / std::max(diagonal_, 1e-300));
+  }
+
+  BrepResult run(const std::vector<int>& labels, const BrepOptions& options);
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  void stage(BrepResult& result, const char* name, Clock::time_point& since) {
+    const auto now = Clock::now();
+    result.timings.emplace_back(name, std::chrono::duration<double>(now - since).count());
+    since = now;
+  }
+  std::vector<int> merge_same_surfaces(const std::vector<int>& labels) const;
+  std::vector<int> dissolve_sampling_blends(const TriangleMesh& mesh, std::vector<int> labels) const;
+  void make_vertices(const MeshTopology& topology);
+  TopoDS_Vertex vertex_at_corner(int mesh_vertex) const { return vertices_.at(mesh_vertex); }
+  void make_edges(BrepResult& result);
+  void make_faces(BrepResult& result);
+  TopoDS_Shape assemble(BrepResult& result, const BrepOptions& options);
+
+  const TriangleMesh& mesh_;
+  const std::vector<Surface>& surfaces_;
+  double diagonal_ = 0, tol_ = 0, angle_eps_ = 0;
+  BoundaryTopology topo_;
+  std::vector<Handle(Geom_Surface)> region_surfaces_;
+  std::vector<double> region_sense_;  // +1 when the surface normal points out of the part
+  std::map<int, TopoDS_Vertex> vertices_;
+  std::map<int, Vec3> corner_points_;
+  std::vector<TopoDS_Edge> edges_;
+  std::vector<char> edge_ok_;
+  std::vector<char> collapsed_;  // chains whose two corners are one vertex: no edge
+  std::vector<TopoDS_Face> faces_;
+  std::vector<int> face_region_;
+};
+
+std::vector<int> BrepBuilder::merge_same_surfaces(const std::vector<int>& labels) const {
+  std::vector<int> representative(surfaces_.size());
+  for (size_t i = 0; i < surfaces_.size(); ++i) {
+    representative[i] = static_cast<int>(i);
+    for (size_t j = 0; j < i; ++j) {
+      if (representative[j] == static_cast<int>(j) && same_surface(surfaces_[i], surfaces_[j], 1e-6 * diagonal_)) {
+        representative[i] = static_cast<int>(j);
+        break;
+      }
+    }
+  }
+  std::vector<int> merged(labels.size());
+  for (size_t f = 0; f < labels.size(); ++f) merged[f] = labels[f] < 0 ? -1 : representative[labels[f]];
+  return merged;
+}
+
+// A scanner samples a sharp edge as a rounded strip about one sample spacing wide, which fits a
+// cylinder (or torus, sphere at corners) of about that radius: on a sampled (not exactly
+// tessellated) mesh, round features with a radius below two median edge lengths are such strips,
+// and their triangles go back to the features on either side (the thesis folds transition strips
+// into the neighbouring patches). An exact CAD tessellation keeps every feature.
+std::vector<int> BrepBuilder::dissolve_sampling_blends(const TriangleMesh& mesh, std::vector<int> labels) const {
+  const int features = static_cast<int>(surfaces_.size());
+  std::vector<double> squared(features, 0.0), count(features, 0.0);
+  std::vector<double> edges;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    for (int c = 0; c < 3; ++c) {
+      edges.push_back((mesh.V.row(mesh.F(f, c)) - mesh.V.row(mesh.F(f, (c + 1) % 3))).norm());
+      if (labels[f] < 0 || surfaces_[labels[f]].type == SurfaceType::Freeform) continue;
+      const double d = signed_distance(surfaces_[labels[f]], mesh.V.row(mesh.F(f, c)).transpose());
+      squared[labels[f]] += d * d;
+      count[labels[f]] += 1;
+    }
+  }
+  if (edges.empty()) return labels;
+  // Exact tessellation: half or more of the features fit to rounding error.
+  int exact = 0, fitted = 0;
+  for (int i = 0; i < features; ++i) {
+    if (count[i] == 0) continue;
+    ++fitted;
+    exact += std::sqrt(squared[i] / count[i]) < 1e-3 * tol_;
+  }
+  if (2 * exact >= fitted) return labels;
+  std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
+  const double spacing = edges[edges.size() / 2];
+  std::vector<char> strip(features, 0);
+  for (int i = 0; i < features; ++i) {
+    const Surface& s = surfaces_[i];
+    const double radius = s.type == SurfaceType::Torus ? s.minor : s.radius;
+    strip[i] = (s.type == SurfaceType::Cylinder || s.type == SurfaceType::Torus || s.type == SurfaceType::Sphere) &&
+               radius < 2 * spacing;
+  }
+  for (int& l : labels) {
+    if (l >= 0 && strip[l]) l = -1;
+  }
+  return labels;
+}
+
+void BrepBuilder::make_vertices(const MeshTopology& topology) {
+  BRep_Builder builder;
+  for (int v : topo_.corners) {
+    std::vector<const Surface*> around;
+    std::set<int> seen;
+    for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f) {
+      const int feature = topo_.region_feature[topo_.face_region[*f]];
+      if (seen.insert(feature).second && surfaces_[feature].type != SurfaceType::Freeform) {
+        around.push_back(&surfaces_[feature]);
+      }
+    }
+    const Vec3 x0 = mesh_.V.row(v).transpose();
+    const Vec3 x = around.empty() ? x0 : corner_point(around, x0, tol_);
+    corner_points_[v] = x;
+  }
+  // Corners that the surfaces put at one point (four features meeting where the mesh shows two
+  // corners joined by a short chain) are one vertex, and the chain between them no edge.
+  std::map<int, int> parent;
+  const std::function<int(int)> root = [&](int v) {
+    auto it = parent.find(v);
+    return it == parent.end() || it->second == v ? v : (it->second = root(it->second));
+  };
+  collapsed_.assign(topo_.chains.size(), 0);
+  for (size_t c = 0; c < topo_.chains.size(); ++c) {
+    const BoundaryChain& chain = topo_.chains[c];
+    const int front = chain.vertices.front(), back = chain.vertices.back();
+    if (chain.closed || front == back || (corner_points_.at(front) - corner_points_.at(back)).norm() >= tol_) continue;
+    collapsed_[c] = 1;
+    const int a = root(front), b = root(back);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+  std::map<int, std::pair<Vec3, int>> merged;  // root -> (sum of points, count)
+  for (int v : topo_.corners) {
+    auto& [sum, count] = merged.try_emplace(root(v), Vec3::Zero(), 0).first->second;
+    sum += corner_points_[v];
+    ++count;
+  }
+  std::map<int, TopoDS_Vertex> made;
+  for (auto& [r, entry] : merged) {
+    builder.MakeVertex(made[r], to_pnt(entry.first / entry.second), Precision::Confusion());
+  }
+  for (int v : topo_.corners) {
+    vertices_[v] = made[root(v)];
+    const auto& entry = merged[root(v)];
+    corner_points_[v] = entry.first / entry.second;
+  }
+}
+
+void BrepBuilder::make_edges(BrepResult& result) {
+  BRep_Builder builder;
+  edges_.assign(topo_.chains.size(), TopoDS_Edge());
+  edge_ok_.assign(topo_.chains.size(), 0);
+  for (size_t c = 0; c < topo_.chains.size(); ++c) {
+    const BoundaryChain& chain = topo_.chains[c];
+    if (collapsed_[c]) {
+      edge_ok_[c] = 1;
+      continue;
+    }
+    const Surface& a = surfaces_[topo_.region_feature[chain.left]];
+    const Surface* b = chain.right >= 0 ? &surfaces_[topo_.region_feature[chain.right]] : nullptr;
+    BrepEdge& report = result.edges.emplace_back();
+    report.a = topo_.region_feature[chain.left];
+    report.b = chain.right >= 0 ? topo_.region_feature[chain.right] : -1;
+    report.mesh_vertices = static_cast<int>(chain.vertices.size());
+    report.closed = chain.closed;
+    if (a.type == SurfaceType::Freeform || (b && b->type == SurfaceType::Freeform)) continue;
+    std::vector<Vec3> raw;
+    for (int v : chain.vertices) raw.push_back(mesh_.V.row(v).transpose());
+    const std::vector<Vec3> points = project_on_both(raw, a, b);
+    try {
+      // A closed form is the exact answer when the chain lies near it; surfaces that touch
+      // tangentially leave the mesh boundary anywhere in the zone where they are close. Surfaces
+      // that are parallel or coaxial only nearly (idealization left them: a sculpted part) get
+      // the closed form of the exact configuration when it stays near the chain: a line or circle
+      // a little off one surface is a sound edge (its tolerance says by how much), the general
+      // intersection of nearly tangent surfaces is not.
+      Handle(Geom_Curve) curve;
+      for (const auto& [angle_eps, gap] : {std::pair{angle_eps_, tol_}, std::pair{kNearlyParallel, 5 * tol_}}) {
+        if (b && curve.IsNull()) curve = closed_form_curve(a, *b, points, angle_eps, gap);
+        if (curve && max_distance_to_curve(curve, points) > (tangent_along(curve, a, *b, points) ? 0.05 * diagonal_ : 5 * tol_))
+          curve.Nullify();
+      }
+      report.curve = curve.IsNull() ? "" : "closed form";
+      if (curve.IsNull() && b) {
+        GeomAPI_IntSS intersection(region_surfaces_[chain.left], region_surfaces_[chain.right], 1e-3 * tol_);
+        double best = 5 * tol_;
+        if (intersection.IsDone()) {
+          for (int i = 1; i <= intersection.NbLines(); ++i) {
+            const double distance = max_distance_to_curve(intersection.Line(i), points);
+            if (distance < best) {
+              best = distance;
+              curve = intersection.Line(i);
+              report.curve = "intersection";
+            }
+          }
+        }
+      }
+      if (curve.IsNull()) {
+        curve = fitted_curve(points, tol_);
+        report.curve = "fitted";
+      }
+      if (curve.IsNull()) {
+        report.curve.clear();
+        result.problems.push_back({topo_.region_feature[chain.left], "an edge of the feature could not be made"});
+        continue;
+      }
+
+      // Ends: the corner vertices, or one new vertex on a closed chain.
+      const bool loop = chain.vertices.front() == chain.vertices.back();
+      TopoDS_Vertex v0, v1;
+      Vec3 p0, p1;
+      if (chain.closed) {
+        GeomAPI_ProjectPointOnCurve start(to_pnt(points.front()), curve);
+        p0 = start.NbPoints() ? to_vec(start.NearestPoint()) : points.front();
+        builder.MakeVertex(v0, to_pnt(p0), Precision::Confusion());
+        v1 = v0;
+        p1 = p0;
+      } else {
+        v0 = vertex_at_corner(chain.vertices.front());
+        v1 = vertex_at_corner(chain.vertices.back());
+        p0 = corner_points_.at(chain.vertices.front());
+        p1 = corner_points_.at(chain.vertices.back());
+      }
+      const Vec3 probe = points[loop ? std::max<size_t>(1, points.size() / 4) : points.size() / 2];
+      double u0 = 0, u1 = 0;
+      for (int attempt = 0; attempt < 2; ++attempt) {
+        const auto parameter = [&](const Vec3& p) { return curve_parameter(curve, p); };
+        bool reverse = false;
+        if (curve->IsPeriodic()) {
+          const double period = curve->Period();
+          const auto wrap = [&](double u) { return u - period * std::floor(u / period); };
+          u0 = parameter(p0);
+          const double up = wrap(parameter(probe) - u0);
+          const double span = loop ? period : wrap(parameter(p1) - u0);
+          reverse = loop ? up > 0.5 * period : up > span;
+          u1 = u0 + (span > 0 ? span : period);
+        } else if (loop) {
+          u0 = curve->FirstParameter();
+          u1 = curve->LastParameter();
+        } else {
+          u0 = parameter(p0);
+          u1 = parameter(p1);
+          reverse = u1 < u0;
+        }
+        if (!reverse) break;
+        if (attempt == 1) throw Standard_Failure("the edge's direction is ambiguous");
+        curve = curve->Reversed();
+      }
+      TopoDS_Edge edge;
+      builder.MakeEdge(edge, curve, Precision::Confusion());
+      builder.Add(edge, v0.Oriented(TopAbs_FORWARD));
+      builder.Add(edge, v1.Oriented(TopAbs_REVERSED));
+      builder.Range(edge, u0, u1);
+      // Vertex tolerance: the gap between the corner point and the curve's end.
+      builder.UpdateVertex(v0, std::max(BRep_Tool::Tolerance(v0), 1.01 * (to_vec(curve->Value(u0)) - p0).norm()));
+      builder.UpdateVertex(v1, std::max(BRep_Tool::Tolerance(v1), 1.01 * (to_vec(curve->Value(u1)) - p1).norm()));
+      edges_[c] = edge;
+      edge_ok_[c] = 1;
+    } catch (const Standard_Failure& failure) {
+      report.curve.clear();
+      result.problems.push_back({topo_.region_feature[chain.left], occt_message(failure, "an edge could not be made")});
+    }
+  }
+}
+
+void BrepBuilder::make_faces(BrepResult& result) {
+  BRep_Builder builder;
+  for (size_t r = 0; r < topo_.region_loops.size(); ++r) {
+    const int feature = topo_.region_feature[r];
+    if (region_surfaces_[r].IsNull()) {
+      result.problems.push_back({feature, "freeform feature: no analytic surface, no B-spline face fitted"});
+      continue;
+    }
+    bool complete = true;
+    for (const auto& loop : topo_.region_loops[r]) {
+      for (const ChainUse& use : loop) complete &= edge_ok_[use.chain] != 0;
+    }
+    if (!complete) {
+      result.problems.push_back({feature, "the face has an edge that could not be made"});
+      continue;
+    }
+    try {
+      TopoDS_Face face;
+      builder.MakeFace(face, region_surfaces_[r], Precision::Confusion());
+      const bool outward = region_sense_[r] > 0;
+      for (const auto& loop : topo_.region_loops[r]) {
+        if (std::all_of(loop.begin(), loop.end(), [&](const ChainUse& use) { return collapsed_[use.chain] != 0; }))
+          continue;
+        TopoDS_Wire wire;
+        builder.MakeWire(wire);
+        // Loops run with the face on their left seen from outside; on a surface whose normal
+        // points into the part the face is built reversed, with the loop reversed.
+        const int n = static_cast<int>(loop.size());
+        for (int i = 0; i < n; ++i) {
+          const ChainUse& use = loop[outward ? i : n - 1 - i];
+          if (collapsed_[use.chain]) continue;
+          const bool forward = use.forward == outward;
+          builder.Add(wire, edges_[use.chain].Oriented(forward ? TopAbs_FORWARD : TopAbs_REVERSED));
+        }
+        wire.Closed(Standard_True);
+        builder.Add(face, wire);
+      }
+      ShapeFix_Edge add_pcurves;
+      for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) {
+        add_pcurves.FixAddPCurve(TopoDS::Edge(e.Current()), face, Standard_False, tol_);
+      }
+      faces_.push_back(outward ? face : TopoDS::Face(face.Reversed()));
+      face_region_.push_back(static_cast<int>(r));
+    } catch (const Standard_Failure& failure) {
+      result.problems.push_back({feature, occt_message(failure, "the face could not be made")});
+    }
+  }
+}
+
+const char* occt_surface_name(const TopoDS_Face& face) {
+  switch (BRepAdaptor_Surface(face).GetType()) {
+    case GeomAbs_Plane: return "plane";
+    case GeomAbs_Cylinder: return "cylinder";
+    case GeomAbs_Cone: return "cone";
+    case GeomAbs_Sphere: return "sphere";
+    case GeomAbs_Torus: return "torus";
+    case GeomAbs_BSplineSurface: return "bspline";
+    default: return "other";
+  }
+}
+
+// An edge used by one face only (seams, used twice by their face, and degenerate edges aside).
+bool has_free_edges(const TopoDS_Shape& shape) {
+  TopTools_IndexedDataMapOfShapeListOfShape faces_of_edge;
+  TopExp::MapShapesAndUniqueAncestors(shape, TopAbs_EDGE, TopAbs_FACE, faces_of_edge);
+  for (int i = 1; i <= faces_of_edge.Extent(); ++i) {
+    const TopoDS_Edge& edge = TopoDS::Edge(faces_of_edge.FindKey(i));
+    const TopTools_ListOfShape& faces = faces_of_edge(i);
+    if (BRep_Tool::Degenerated(edge) || faces.Extent() >= 2) continue;
+    if (faces.Extent() == 0 || !BRep_Tool::IsClosed(edge, TopoDS::Face(faces.First()))) return true;
+  }
+  return false;
+}
+
+TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& options) {
+  // Each face that needs it is healed on its own (pcurves shifted into one period, seams of
+  // closed faces, degenerate edges at poles), then the faces are sewn: healing may replace an
+  // edge in one face and not in its neighbour, and healing the whole shell at once
+  // (ShapeFix_Shell) crashes on such shells in OCCT 7.6.
+  BRepBuilderAPI_Sewing sewing(tol_);
+  for (size_t i = 0; i < faces_.size(); ++i) {
+    try {
+      OCC_CATCH_SIGNALS
+      // Healing only where needed: invalid faces, and faces bounded by nothing (a whole sphere
+      // or torus gets its natural bounds).
+      if (TopExp_Explorer(faces_[i], TopAbs_WIRE).More() && BRepCheck_Analyzer(faces_[i]).IsValid()) {
+        sewing.Add(faces_[i]);
+        continue;
+      }
+      ShapeFix_Face fix(faces_[i]);
+      // Its periodic-degenerate check dereferences a null curve on some faces (OCCT 7.6); our
+      // spheres and cones have their poles and apices away from the faces anyway.
+      fix.FixPeriodicDegeneratedMode() = 0;
+      fix.SetPrecision(Precision::Confusion());
+      fix.SetMaxTolerance(tol_);
+      fix.Perform();
+      sewing.Add(fix.Face());
+    } catch (const Standard_Failure& failure) {
+      result.problems.push_back({topo_.region_feature[face_region_[i]], occt_message(failure, "its face could not be healed")});
+    }
+  }
+  sewing.Perform();
+  TopoDS_Shape shape = sewing.SewedShape();
+  if (shape.ShapeType() == TopAbs_FACE) {  // a single face (a whole sphere) is sewn to itself
+    BRep_Builder builder;
+    TopoDS_Shell shell;
+    builder.MakeShell(shell);
+    builder.Add(shell, shape);
+    shape = shell;
+  }
+
+  // Closed shells become solids.
+  TopoDS_Shell fixed_shell;
+  int shells = 0;
+  for (TopExp_Explorer e(shape, TopAbs_SHELL); e.More(); e.Next(), ++shells) fixed_shell = TopoDS::Shell(e.Current());
+  const bool closed = shells == 1 && !has_free_edges(shape);
+  result.closed = closed;
+  if (closed) {
+    ShapeFix_Solid make_solid;
+    TopoDS_Solid solid = TopoDS::Solid(make_solid.SolidFromShell(fixed_shell));
+    shape = solid;
+  }
+  if (options.unify) {
+    // Merging is a refinement: where OCCT's merging fails (it faults on some edges), the faces
+    // stay as they are.
+    try {
+      OCC_CATCH_SIGNALS
+      ShapeUpgrade_UnifySameDomain unify(shape, Standard_True, Standard_True, Standard_False);
+      unify.SetLinearTolerance(tol_ * 1e-3);
+      unify.Build();
+      shape = unify.Shape();
+    } catch (const Standard_Failure&) {
+    }
+  }
+  return shape;
+}
+
+BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& options) {
+  BrepResult result;
+  auto since = Clock::now();
+  // Faces whose corners coincide carry no area and no topology.
+  TriangleMesh clean;
+  std::vector<int> clean_labels;
+  clean.V = mesh_.V;
+  std::vector<int> kept;
+  for (int f = 0; f < mesh_.num_faces(); ++f) {
+    const int a = mesh_.F(f, 0), b = mesh_.F(f, 1), c = mesh_.F(f, 2);
+    if (a != b && b != c && a != c) kept.push_back(f);
+  }
+  clean.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
+  for (size_t i = 0; i < kept.size(); ++i) {
+    clean.F.row(static_cast<Eigen::Index>(i)) = mesh_.F.row(kept[i]);
+    clean_labels.push_back(labels[kept[i]]);
+  }
+  const MeshTopology topology(clean);
+  const std::vector<int> merged = dissolve_sampling_blends(clean, merge_same_surfaces(clean_labels));
+  const std::vector<int> face_feature = complete_face_features(clean, topology, merged, surfaces_);
+  topo_ = trace_boundaries(clean, topology, face_feature);
+  stage(result, "brep.topology", since);
+
+  // One surface per region, oriented against the mesh normals.
+  const int regions = static_cast<int>(topo_.region_feature.size());
+  std::vector<std::vector<Vec3>> region_points(regions);
+  region_sense_.assign(regions, 0.0);
+  for (int f = 0; f < clean.num_faces(); ++f) {
+    const int r = topo_.face_region[f];
+    const Vec3 a = clean.V.row(clean.F(f, 0)), b = clean.V.row(clean.F(f, 1)), c = clean.V.row(clean.F(f, 2));
+    const Vec3 centre = (a + b + c) / 3.0;
+    const Vec3 area_normal = 0.5 * (b - a).cross(c - a);
+    region_points[r].push_back(centre);
+    const Surface& s = surfaces_[topo_.region_feature[r]];
+    if (s.type != SurfaceType::Freeform) region_sense_[r] += surface_normal(s, centre).dot(area_normal);
+  }
+  region_surfaces_.resize(regions);
+  for (int r = 0; r < regions; ++r) {
+    region_surfaces_[r] = make_surface(surfaces_[topo_.region_feature[r]], region_points[r]);
+  }
+  make_vertices(topology);
+  make_edges(result);
+  stage(result, "brep.edges", since);
+  make_faces(result);
+  stage(result, "brep.faces", since);
+
+  TopoDS_Shape shape = assemble(result, options);
+  stage(result, "brep.sew", since);
+
+  // Validate; an invalid result keeps only its valid faces, as a shell (never an invalid solid).
+  result.valid = BRepCheck_Analyzer(shape).IsValid();
+  result.solid = result.valid && result.closed && shape.ShapeType() == TopAbs_SOLID;
+  if (!result.valid) {
+    BRep_Builder builder;
+    TopoDS_Compound kept_faces;
+    builder.MakeCompound(kept_faces);
+    for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
+      if (BRepCheck_Analyzer(e.Current()).IsValid()) {
+        builder.Add(kept_faces, e.Current());
+      } else {
+        const Handle(Geom_Surface) surface = BRep_Tool::Surface(TopoDS::Face(e.Current()));
+        for (int r = 0; r < regions; ++r) {
+          if (region_surfaces_[r] == surface) result.problems.push_back({topo_.region_feature[r], "its face is not valid"});
+        }
+      }
+    }
+    shape = kept_faces;
+    result.valid = BRepCheck_Analyzer(shape).IsValid();  // what is returned: the valid faces
+  }
+  if (!result.closed) result.problems.push_back({-1, "the faces do not close into a solid (free edges remain)"});
+  result.shape = shape;
+  for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
+    const TopoDS_Face& face = TopoDS::Face(e.Current());
+    ++result.faces;
+    ++result.surface_types[occt_surface_name(face)];
+    const Handle(Geom_Surface) surface = BRep_Tool::Surface(face);
+    int feature = -1;
+    for (int r = 0; r < regions && feature < 0; ++r) {
+      if (region_surfaces_[r] == surface) feature = topo_.region_feature[r];
+    }
+    result.face_features.push_back(feature);
+  }
+  if (result.solid) {
+    GProp_GProps properties;
+    BRepGProp::VolumeProperties(shape, properties);
+    result.volume = std::abs(properties.Mass());
+  }
+  stage(result, "brep.check", since);
+  return result;
+}
+
+}  // namespace
+
+BrepResult build_brep(const TriangleMesh& mesh, const std::vector<int>& labels,
+                      const std::vector<Surface>& surfaces, const BrepOptions& options) {
+  if (static_cast<int>(labels.size()) != mesh.num_faces()) {
+    throw std::invalid_argument("build_brep: one label per triangle expected");
+  }
+  for (int l : labels) {
+    if (l >= static_cast<int>(surfaces.size())) throw std::invalid_argument("build_brep: label without a surface");
+  }
+  // OpenCASCADE's healing and checking dereference null pointers on some inputs; with its signal
+  // handlers installed for the duration of the call such a fault becomes an exception (thrown at
+  // the nearest OCC_CATCH_SIGNALS) instead of taking the user's FreeCAD down.
+  const OcctSignalHandlers handlers;
+  try {
+    OCC_CATCH_SIGNALS
+    return BrepBuilder(mesh, surfaces, options).run(labels, options);
+  } catch (const Standard_Failure& failure) {
+    throw std::runtime_error(occt_message(failure, "B-rep construction failed"));
+  }
+}
+
+}  // namespace idealize

@@ -1,0 +1,80 @@
+// The fitted B-rep: one analytic face per region of the feature layer, trimmed by the
+// intersection curves of adjacent ideal surfaces, sewn into a shell and a solid with OpenCASCADE.
+//
+// Built here in the native core against OCCT rather than through FreeCAD's Part module: the
+// command line writes STEP without FreeCAD, the construction runs without the GIL, and the edges
+// are created once and shared by their two faces (no sewing by tolerance, which merges or misses
+// edges on small features).
+//
+// Topology comes from the mesh (brep_topology.h): each region boundary chain becomes an edge on
+// the exact intersection of the two ideal surfaces (line, circle or ellipse in closed form for the
+// pairs an idealized prismatic part has; OCCT's surface intersection otherwise; a B-spline through
+// the chain projected onto both surfaces where the surfaces touch tangentially and no closed form
+// applies), each corner a vertex at the point closest to all surfaces meeting there.
+#pragma once
+
+#include "mesh.h"
+#include "surface.h"
+
+#include <TopoDS_Shape.hxx>
+
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace idealize {
+
+struct BrepOptions {
+  // Distance below which geometry is equal (edge and vertex tolerance baseline); 0 derives it
+  // as 0.1 % of the bounding-box diagonal, the feature layer's distance tolerance.
+  double tolerance = 0.0;
+  // Merge faces and edges that lie on the same surface or curve (ShapeUpgrade_UnifySameDomain).
+  bool unify = true;
+};
+
+// One problem with one feature: it has no face in the result, or its face is not valid.
+struct BrepProblem {
+  int feature = -1;
+  std::string message;
+};
+
+// One edge of the B-rep as built from the mesh, before healing and merging.
+struct BrepEdge {
+  int a = -1, b = -1;       // the features on either side (b = -1 on an open mesh boundary)
+  int mesh_vertices = 0;    // length of the boundary chain it replaces
+  bool closed = false;      // no corner on it
+  std::string curve;        // "closed form", "intersection", "fitted", or "" when it failed
+};
+
+struct BrepResult {
+  TopoDS_Shape shape;      // a solid when `solid`, otherwise a shell or compound of the faces made
+  bool valid = false;      // BRepCheck_Analyzer accepts the whole shape
+  bool closed = false;     // no free edges
+  bool solid = false;      // shape is a valid closed solid
+  int faces = 0;
+  double volume = 0.0;     // of the solid (0 otherwise)
+  std::map<std::string, int> surface_types;  // face count per surface type name
+  std::vector<BrepProblem> problems;
+  std::vector<int> face_features;            // per face of `shape` (TopExp order): its feature, -1 unknown
+  std::vector<BrepEdge> edges;
+  std::vector<std::pair<std::string, double>> timings;
+};
+
+// Builds the B-rep of `mesh` (the input, counter-clockwise seen from outside) whose faces carry
+// feature `labels` (#F, -1 = transition, joined to the nearest adjacent feature) on `surfaces`
+// (per feature; freeform features have no face and are reported).
+BrepResult build_brep(const TriangleMesh& mesh, const std::vector<int>& labels,
+                      const std::vector<Surface>& surfaces, const BrepOptions& options = {});
+
+// The shape in OCCT's native BRep text format (FreeCAD: Part.Shape().importBrepFromString).
+std::string brep_string(const TopoDS_Shape& shape);
+
+// Writes the shape to a STEP AP214 file in millimetres, faces coloured by surface type. Throws
+// std::runtime_error when the file cannot be written.
+void write_step(const TopoDS_Shape& shape, const std::string& path);
+
+// A triangulation of the shape's faces with chordal deviation at most `deflection`.
+TriangleMesh triangulate(const TopoDS_Shape& shape, double deflection);
+
+}  // namespace idealize
