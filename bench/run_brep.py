@@ -192,7 +192,7 @@ def _pct(x, digits=3) -> str:
 
 def markdown(results: Dict) -> str:
     s = results["summary"]
-    lines = [SECTION_BEGIN, "## B-rep benchmark", "",
+    lines = ["## B-rep benchmark", "",
              f"`{results['command']}` on {results['date']}, {results['machine'].get('cpu', '')}; "
              f"{results['total_seconds'] / 60:.1f} min. Ground truth: the STEP solid, faces on one surface "
              f"joined through shared edges; Hausdorff distance between tessellations of both solids "
@@ -238,7 +238,7 @@ def markdown(results: Dict) -> str:
             lines.append(f"| {entry['triangles']} | {entry['total_seconds']:.2f} s | {entry['brep_seconds']:.3f} s | "
                          f"{entry['step_seconds']:.3f} s | {entry['solid']} | {entry['faces']} | "
                          f"{entry['step_bytes'] / 1024:.0f} kB | {fc} |")
-    lines += ["", "Per mesh: bench/results/brep.json.", SECTION_END]
+    lines += ["", "Per mesh: bench/results/brep.json."]
     return "\n".join(lines)
 
 
