@@ -5,6 +5,7 @@ import time
 import numpy as np
 
 from ._loader import native
+from .features import count_summary
 
 
 class Solid:
@@ -70,9 +71,9 @@ class Solid:
         }
 
     def __repr__(self):
-        kinds = ", ".join("%d %s" % (n, t) for t, n in sorted(self.surface_types.items()))
         state = "solid" if self.solid else ("invalid" if not self.valid else "open shell")
-        return "<idealize.Solid %s, %d faces (%s), volume %.6g>" % (state, self.faces, kinds, self.volume)
+        return "<idealize.Solid %s, %d faces (%s), volume %.6g>" % (
+            state, self.faces, count_summary(self.surface_types), self.volume)
 
 
 def make_solid(layer, tolerance=None):

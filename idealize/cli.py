@@ -4,7 +4,7 @@ import sys
 import time
 
 from .brep import make_solid
-from .features import idealize
+from .features import count_summary, idealize
 from .mesh import MeshError, load_mesh
 from .report import build_report, write_report
 
@@ -40,10 +40,11 @@ def convert(args):
     if args.report:
         write_report(report, args.report)
     print("%s: %d triangles, %d features (%s), %.3f s"
-          % (args.input, mesh.n_triangles, len(layer.features), _kinds(layer.type_counts()), timings["total"]))
+          % (args.input, mesh.n_triangles, len(layer.features), count_summary(layer.type_counts()),
+             timings["total"]))
     if solid.solid:
         print("solid: %d faces (%s), volume %.6g, written to %s"
-              % (solid.faces, _kinds(solid.surface_types), solid.volume, args.output))
+              % (solid.faces, count_summary(solid.surface_types), solid.volume, args.output))
     else:
         print("warning: no valid closed solid; %s" % ("%d faces written to %s" % (solid.faces, args.output)
                                                       if solid.faces else "no STEP file written"), file=sys.stderr)
@@ -52,10 +53,6 @@ def convert(args):
     if args.report:
         print("report written to %s" % args.report)
     return 0 if solid.solid else EXIT_NOT_SOLID
-
-
-def _kinds(counts):
-    return ", ".join("%d %s" % (n, t) for t, n in sorted(counts.items()))
 
 
 def main(argv=None):

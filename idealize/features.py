@@ -6,6 +6,11 @@ from .mesh import Mesh
 from .segmentation import segment
 
 
+def count_summary(counts):
+    """"2 cylinder, 6 plane" from {"plane": 6, "cylinder": 2}: counts per type, for messages."""
+    return ", ".join("%d %s" % (n, t) for t, n in sorted(counts.items()))
+
+
 class FeatureLayer:
     """Result of :func:`idealize`.
 
@@ -49,9 +54,8 @@ class FeatureLayer:
         return counts
 
     def __repr__(self):
-        kinds = ", ".join("%d %s" % (n, t) for t, n in sorted(self.type_counts().items()))
         return "<idealize.FeatureLayer %d features (%s), %d relations>" % (
-            len(self.features), kinds, len(self.relations))
+            len(self.features), count_summary(self.type_counts()), len(self.relations))
 
 
 def idealize(mesh, segmentation=None):

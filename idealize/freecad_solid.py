@@ -64,12 +64,12 @@ def primitive_shape(feature, points):
     return None
 
 
-def make_primitives(doc, source_obj, layer, name=None):
+def make_primitives(doc, source_obj, layer):
     """Add an App::DocumentObjectGroup "<Label>_Primitives" holding one Part::Feature per
     analytic feature (named "F<id>_<type>"), placed and sized by the idealized parameters."""
     mesh = layer.mesh
     labels = np.asarray(layer.labels)
-    group = doc.addObject("App::DocumentObjectGroup", (name or source_obj.Name) + "_Primitives")
+    group = doc.addObject("App::DocumentObjectGroup", source_obj.Name + "_Primitives")
     group.Label = source_obj.Label + "_Primitives"
     for feature in layer.features:
         faces = mesh.faces[labels == feature["id"]]
@@ -84,15 +84,17 @@ def make_primitives(doc, source_obj, layer, name=None):
     return group
 
 
-def make_solid_object(doc, source_obj, layer=None, with_primitives=True):
+def make_solid_object(doc, source_obj, layer=None, solid=None, with_primitives=True):
     """Add a Part::Feature "<Label>_Solid" with the fitted B-rep of source_obj (a Mesh::Feature)
-    and, with_primitives, a group of Part primitives. source_obj is not modified.
+    and, with_primitives, a group of Part primitives. source_obj is not modified. The feature
+    layer and the :class:`idealize.Solid` are computed unless given.
 
     Returns (solid object, primitives group or None, :class:`idealize.Solid`). The shape is a
     valid solid, or, when the faces do not close, the faces that could be made (the object's
     IdealizeProblems property lists why). Callers wrap this in a document transaction.
     """
-    layer, solid = solid_of_mesh_object(source_obj, layer)
+    if solid is None:
+        layer, solid = solid_of_mesh_object(source_obj, layer)
     obj = doc.addObject("Part::Feature", source_obj.Name + "_Solid")
     obj.Label = source_obj.Label + "_Solid"
     obj.Shape = solid.part_shape()

@@ -5,6 +5,7 @@ import FreeCAD
 import FreeCADGui
 
 from .. import freecad_mesh, freecad_solid
+from ..features import count_summary
 from . import icon
 
 
@@ -54,14 +55,18 @@ def _run_on_selection(title, transaction, compute, make_result, describe, show=_
     FreeCADGui.Selection.addSelection(result)
 
 
-class SegmentCommand:
+class _MeshCommand:
+    """A command on the one selected mesh."""
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and _selected_mesh() is not None
+
+
+class SegmentCommand(_MeshCommand):
     def GetResources(self):
         return {"Pixmap": icon("Idealize_Segment"),
                 "MenuText": "Segment",
                 "ToolTip": "Split the selected mesh into feature patches (fully automatic)"}
-
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None and _selected_mesh() is not None
 
     def Activated(self):
         def describe(source, segmentation, seconds):
@@ -72,43 +77,37 @@ class SegmentCommand:
                           freecad_mesh.make_segmented_mesh, describe)
 
 
-class SegmentIdealizeCommand:
+class SegmentIdealizeCommand(_MeshCommand):
     def GetResources(self):
         return {"Pixmap": icon("Idealize_SegmentIdealize"),
                 "MenuText": "Segment && Idealize",
                 "ToolTip": "Find the features of the selected mesh (planes, cylinders, cones, spheres, tori) "
                            "with exact parameters; adds a copy coloured by feature type"}
 
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None and _selected_mesh() is not None
-
     def Activated(self):
         def describe(source, layer, seconds):
-            kinds = ", ".join("%d %s" % (n, t) for t, n in sorted(layer.type_counts().items()))
             return ("Idealize: %s has %d features (%s), deviation %.3g max, in %.2f s" % (
-                source.Label, len(layer.features), kinds, layer.deviation["max"], seconds),
+                source.Label, len(layer.features), count_summary(layer.type_counts()), layer.deviation["max"],
+                seconds),
                 freecad_mesh.feature_table(layer))
 
         _run_on_selection("Segment & Idealize", "Segment and idealize mesh", freecad_mesh.idealize_mesh_object,
                           freecad_mesh.make_feature_mesh, describe)
 
 
-class MakeSolidCommand:
+class MakeSolidCommand(_MeshCommand):
     def GetResources(self):
         return {"Pixmap": icon("Idealize_MakeSolid"),
                 "MenuText": "Make B-rep solid",
                 "ToolTip": "Fit a solid to the selected mesh: one exact plane, cylinder, cone, sphere or torus "
                            "face per feature, plus a group of Part primitives"}
 
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None and _selected_mesh() is not None
-
     def Activated(self):
         primitives = []
 
         def make_result(doc, source, computed):
-            layer, _ = computed
-            obj, group, _ = freecad_solid.make_solid_object(doc, source, layer)
+            layer, solid = computed
+            obj, group, _ = freecad_solid.make_solid_object(doc, source, layer, solid)
             primitives.extend(group.Group)
             return obj
 
@@ -120,10 +119,9 @@ class MakeSolidCommand:
 
         def describe(source, computed, seconds):
             _, solid = computed
-            kinds = ", ".join("%d %s" % (n, t) for t, n in sorted(solid.surface_types.items()))
             state = "solid" if solid.solid else "NO valid closed solid, only faces"
             return ("Idealize: %s -> %s with %d faces (%s), volume %.6g, in %.2f s" % (
-                source.Label, state, solid.faces, kinds, solid.volume, seconds),
+                source.Label, state, solid.faces, count_summary(solid.surface_types), solid.volume, seconds),
                 ["  feature %d: %s" % (f, m) if f >= 0 else "  %s" % m for f, m in solid.problems])
 
         _run_on_selection("Make B-rep solid", "Make B-rep solid", freecad_solid.solid_of_mesh_object, make_result,
