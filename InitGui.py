@@ -15,7 +15,8 @@ class IdealizeWorkbench(FreeCADGui.Workbench):
     def Initialize(self):
         # Imported on first activation only: keeps FreeCAD start-up free of the native core.
         import idealize.gui.commands  # noqa: F401  (registers the commands)
-        commands = ["Idealize_Segment", "Idealize_SegmentIdealize", "Idealize_MakeSolid", "Idealize_ExportStep"]
+        commands = ["Idealize_Segment", "Idealize_SegmentIdealize", "Idealize_DeviationMap", "Idealize_MakeSolid",
+                    "Idealize_ExportStep"]
         self.appendToolbar("Idealize", commands)
         self.appendMenu("&Idealize", commands)
 
@@ -24,7 +25,8 @@ class IdealizeWorkbench(FreeCADGui.Workbench):
 
 
 # Init.py put the checkout on sys.path; find_spec locates the package without importing it.
-IdealizeWorkbench.Icon = os.path.join(
-    os.path.dirname(os.path.dirname(importlib.util.find_spec("idealize").origin)),
-    "Resources", "icons", "Idealize.svg")
+_RESOURCES = os.path.join(os.path.dirname(os.path.dirname(importlib.util.find_spec("idealize").origin)), "Resources")
+IdealizeWorkbench.Icon = os.path.join(_RESOURCES, "icons", "Idealize.svg")
+# Registered at start-up, so the page is there before the workbench is first activated.
+FreeCADGui.addPreferencePage(os.path.join(_RESOURCES, "ui", "PreferencesIdealize.ui"), "Idealize")
 FreeCADGui.addWorkbench(IdealizeWorkbench())

@@ -13,13 +13,18 @@ Console use (plain Python or FreeCAD)::
     solid = idealize.make_solid(layer)
     solid.solid       # True: a valid closed solid
     solid.write_step("part.step")
+
+Long calls take ``progress=idealize.Progress()`` to be watched and cancelled from another thread
+(see idealize.progress).
 """
 from .brep import Solid, make_solid
 from .curvature import vertex_curvature
 from .features import FeatureLayer, idealize
+from .layer_object import feature_layer, make_feature_layer
 from .mesh import Mesh, MeshError, load_mesh
+from .progress import Cancelled, Progress
 from .segmentation import Segmentation, segment
 
-__all__ = ["FeatureLayer", "Mesh", "MeshError", "idealize", "load_mesh", "make_solid", "Segmentation",
-           "segment", "Solid", "vertex_curvature"]
+__all__ = ["Cancelled", "FeatureLayer", "feature_layer", "Mesh", "MeshError", "idealize", "load_mesh",
+           "make_feature_layer", "make_solid", "Progress", "Segmentation", "segment", "Solid", "vertex_curvature"]
 __version__ = "0.1.0"

@@ -23,6 +23,22 @@ SURFACE_COLORS = {
 }
 TRANSITION_COLOR = (1.0, 0.0, 0.0)   # edges / transition triangles: red
 
+# Deviation map: colour stops from 0 (blue, on the surface) to the legend's top value (red).
+DEVIATION_STOPS = np.array([(0.0, 0.2, 0.8), (0.0, 0.75, 0.75), (0.2, 0.8, 0.2), (1.0, 0.9, 0.0), (0.9, 0.0, 0.0)])
+
+
+def deviation_colors(values, top):
+    """(len(values), 3) RGB in 0..1 for deviations: linear through DEVIATION_STOPS from 0 to `top`,
+    clamped above; NaN (no analytic surface to measure from) in the freeform grey."""
+    values = np.asarray(values, dtype=np.float64)
+    known = np.isfinite(values)
+    t = np.clip(np.where(known, values, 0.0) / top if top > 0 else 0.0, 0.0, 1.0) * (len(DEVIATION_STOPS) - 1)
+    low = np.minimum(np.floor(t).astype(int), len(DEVIATION_STOPS) - 2)
+    w = (t - low)[..., None]
+    colors = (1.0 - w) * DEVIATION_STOPS[low] + w * DEVIATION_STOPS[low + 1]
+    colors[~known] = SURFACE_COLORS["freeform"]
+    return colors
+
 # Name of the per-facet colour property on segmented meshes. ViewProviderMesh (0.20) shows the
 # first App::PropertyColorList of a Mesh::Feature per facet when its length equals the facet
 # count and the view property Coloring is on.
@@ -48,7 +64,8 @@ def mesh_from_freecad(mesh):
     return Mesh(vertices, faces, source=getattr(mesh, "Label", None))
 
 
-def _usable_mesh(obj):
+def usable_mesh(obj):
+    """:func:`mesh_from_freecad`, refusing a mesh without triangles."""
     mesh = mesh_from_freecad(obj)
     if mesh.n_triangles == 0:
         raise MeshError("%s has no triangles" % (mesh.source or "the mesh"))
@@ -57,20 +74,20 @@ def _usable_mesh(obj):
 
 def segment_mesh_object(obj):
     """Segment a Mesh::Feature (or Mesh.Mesh); labels follow its facet order."""
-    return segment(_usable_mesh(obj))
+    return segment(usable_mesh(obj))
 
 
 def idealize_mesh_object(obj):
     """The feature layer (:class:`idealize.FeatureLayer`) of a Mesh::Feature or Mesh.Mesh."""
-    return idealize(_usable_mesh(obj))
+    return idealize(usable_mesh(obj))
 
 
-def type_colors(layer):
+def type_colors(features, labels):
     """(M, 3) RGB in 0..1: every triangle in the thesis colour of its feature's type, red where
-    it belongs to no feature."""
-    palette = np.array([SURFACE_COLORS[f["type"]] for f in layer.features] + [TRANSITION_COLOR])
-    labels = np.asarray(layer.labels)
-    return palette[np.where(labels >= 0, labels, len(layer.features))]
+    it belongs to no feature (labels -1)."""
+    palette = np.array([SURFACE_COLORS[f["type"]] for f in features] + [TRANSITION_COLOR])
+    labels = np.asarray(labels)
+    return palette[np.where(labels >= 0, labels, len(features))]
 
 
 def feature_table(layer):
@@ -136,16 +153,3 @@ def make_segmented_mesh(doc, source_obj, segmentation=None):
         segmentation = segment_mesh_object(source_obj)
     return _colored_copy(doc, source_obj, "_Segmented", patch_colors(segmentation.labels, segmentation.transition),
                          "Colour of each facet: one per feature patch, red on transitions")
-
-
-def make_feature_mesh(doc, source_obj, layer=None):
-    """Add a Mesh::Feature "<Label>_Features" to doc: a copy of source_obj's mesh coloured by the
-    type of each facet's feature (thesis colours, SURFACE_COLORS). source_obj is not modified.
-
-    Computes the feature layer first unless one is given; callers wrap this in a transaction.
-    """
-    if layer is None:
-        layer = idealize_mesh_object(source_obj)
-    return _colored_copy(doc, source_obj, "_Features", type_colors(layer),
-                         "Colour of each facet: the type of its feature (plane light green, cylinder "
-                         "yellow, cone light blue, sphere dark green, torus dark red, freeform grey)")

@@ -39,11 +39,17 @@ class Segmentation:
             self.n_features, int(np.count_nonzero(self.transition)), len(self.labels))
 
 
-def segment(mesh):
-    """Segment a mesh into feature patches, fully automatically (no parameters)."""
+def segment(mesh, progress=None):
+    """Segment a mesh into feature patches, fully automatically (no parameters).
+
+    progress: an :class:`idealize.Progress` that another thread may read (``fraction`` goes from
+    the start to the end of its ``range``, 0 to 1 unless set, ``stage`` names the step) and
+    ``cancel()``; a cancelled run raises :class:`idealize.Cancelled`. The GIL is released while
+    the native code runs.
+    """
     if not isinstance(mesh, Mesh):
         raise TypeError("segment() takes an idealize.Mesh (see idealize.load_mesh), got %s"
                         % type(mesh).__name__)
     if mesh.n_triangles == 0:
         raise MeshError("the mesh has no triangles")
-    return Segmentation(native.segment(mesh.vertices, mesh.faces))
+    return Segmentation(native.segment(mesh.vertices, mesh.faces, progress=progress))

@@ -59,6 +59,39 @@ def red_and_colour_counts(path):
     return red, sum(n >= 0.005 * len(rgb) for n in area.values())
 
 
+def dominant_hue(path):
+    """Hue (degrees, 30 degree bins) that covers most of the coloured pixels of a screenshot."""
+    import numpy as np
+    from PySide import QtGui
+    image = QtGui.QImage(path).convertToFormat(QtGui.QImage.Format_RGB32)
+    bgra = np.frombuffer(bytes(image.constBits()), np.uint8).reshape(image.height(), -1, 4)
+    rgb = bgra[:, :image.width(), 2::-1].reshape(-1, 3).astype(int)
+    coloured = rgb[rgb.max(axis=1) - rgb.min(axis=1) > 40]
+    hues = [QtGui.QColor(*map(int, c)).hue() // 30 * 30 for c in coloured[::7]]
+    return max(set(hues), key=hues.count) if hues else None
+
+
+def type_color_counts(colors):
+    """{surface type: facets} of per-facet colours in the thesis palette ("other": anything else)."""
+    from idealize.freecad_mesh import SURFACE_COLORS
+    palette = {tuple(round(c, 2) for c in rgb): t for t, rgb in SURFACE_COLORS.items()}
+    seen = {}
+    for c in colors:
+        t = palette.get(tuple(round(x, 2) for x in c[:3]), "other")
+        seen[t] = seen.get(t, 0) + 1
+    return seen
+
+
+def shoot(key):
+    """Isometric screenshot of the whole scene, without selection highlight."""
+    Gui.Selection.clearSelection()
+    view = Gui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    view.fitAll()
+    Gui.updateGui()
+    view.saveImage(CONFIG[key], 800, 600, "White")
+
+
 def run_on(doc, obj, command):
     """Run a command with obj selected; the objects it added."""
     Gui.Selection.clearSelection()
@@ -77,8 +110,8 @@ def run():
     if "IdealizeWorkbench" not in result["workbenches"]:
         return
 
-    from PySide import QtGui
-    import Part, MeshPart
+    from PySide import QtCore, QtGui
+    import Mesh, Part, MeshPart
     # A failing command would block on its modal error box: record the message instead.
     result["error_boxes"] = []
     QtGui.QMessageBox.critical = lambda parent, title, text, *rest: result["error_boxes"].append(text)
@@ -125,26 +158,113 @@ def run():
     result["objects_after_undo"] = [o.Label for o in doc.Objects]
     result["source_visible_after_undo"] = source.ViewObject.Visibility
 
-    # Segment & Idealize: a copy coloured by feature type, undone in one step.
+    # Segment & Idealize: a feature layer object coloured by type, undone in one step.
     new = run_on(doc, source, "Idealize_SegmentIdealize")
     result["idealize_labels"] = [o.Label for o in new]
     result["idealize_undo_name"] = doc.UndoNames[0] if doc.UndoNames else None
     if new:
-        from idealize.freecad_mesh import SURFACE_COLORS
-        palette = {tuple(round(c, 2) for c in rgb): t for t, rgb in SURFACE_COLORS.items()}
-        seen = {}
-        for c in new[0].FaceColors:
-            t = palette.get(tuple(round(x, 2) for x in c[:3]), "other")
-            seen[t] = seen.get(t, 0) + 1
-        result["idealize_type_colors"] = seen
+        layer = new[0]
+        result["layer"] = {"type": layer.TypeId, "source": layer.Source.Name, "labels": len(layer.Labels),
+                           "features": layer.Features, "facets": layer.Mesh.CountFacets,
+                           "color_by": layer.ViewObject.ColorBy, "coloring": layer.ViewObject.Coloring,
+                           "touched": "Touched" in layer.State, "proxy": type(layer.Proxy).__name__}
+        result["idealize_type_colors"] = type_color_counts(layer.FaceColors)
+        shoot("screenshot_types")
+        result["hue_types"] = dominant_hue(CONFIG["screenshot_types"])
+        # One undo removes the layer (and shows the source again); redo brings it back whole.
+        name, labels = layer.Name, list(layer.Labels)
+        doc.undo()
+        result["after_layer_undo"] = [[o.Label for o in doc.Objects], source.ViewObject.Visibility]
+        doc.redo()
+        layer = doc.getObject(name)
+        result["after_layer_redo"] = layer is not None and list(layer.Labels) == labels
+        # Colour by feature: one colour per feature.
+        layer.ViewObject.ColorBy = "Feature"
+        result["feature_colors"] = len(set(layer.FaceColors))
+        # Deviation map through its command: colours from the deviation scale and a legend.
         Gui.Selection.clearSelection()
-        view = Gui.ActiveDocument.ActiveView
-        view.viewIsometric()
-        view.fitAll()
+        Gui.Selection.addSelection(layer)
+        result["deviation_active"] = Gui.isCommandActive("Idealize_DeviationMap")
+        Gui.runCommand("Idealize_DeviationMap")
         Gui.updateGui()
-        view.saveImage(CONFIG["screenshot_types"], 800, 600, "White")
-    doc.undo()
-    result["objects_after_idealize_undo"] = [o.Label for o in doc.Objects]
+        result["deviation_mode"] = layer.ViewObject.ColorBy
+        result["deviation_colors"] = len(set(layer.FaceColors))
+        legend = layer.ViewObject.Proxy.legend
+        result["legend_shown"] = legend is not None and legend.node.whichChild.getValue() != -1
+        shoot("screenshot_deviation")
+        result["hue_deviation"] = dominant_hue(CONFIG["screenshot_deviation"])
+        layer.ViewObject.ColorBy = "Type"
+        result["legend_after_type"] = legend.node.whichChild.getValue() != -1 if legend else None
+
+        # The task panel (double-click): the table, row <-> facet selection, the options section.
+        Gui.Selection.clearSelection()
+        Gui.ActiveDocument.setEdit(layer.Name)
+        Gui.updateGui()
+        panel = layer.ViewObject.Proxy.panel
+        table = panel.form.features
+        result["panel"] = {"rows": table.rowCount(), "columns": table.columnCount(),
+                           "types": sorted({table.item(r, 1).text() for r in range(table.rowCount())}),
+                           "options_hidden": not panel.form.options.isVisible()}
+        cylinder_row = [r for r in range(table.rowCount()) if table.item(r, 1).text() == "cylinder"][0]
+        table.selectRow(cylinder_row)
+        Gui.updateGui()
+        cylinder = int(table.item(cylinder_row, 0).text())
+        labels = list(layer.Labels)
+        base = type_color_counts(layer.FaceColors)
+        result["highlight"] = {"cylinder_facets": labels.count(cylinder), "bright": base}
+        panel.form.grab().save(CONFIG["screenshot_panel"])
+        # A click on a plane facet in the view selects that plane's row.
+        plane_facet = next(i for i, l in enumerate(labels)
+                           if table.item([int(table.item(r, 0).text()) for r in range(table.rowCount())].index(l),
+                                         1).text() == "plane")
+        Gui.Selection.addSelection(doc.Name, layer.Name, "Facet%d" % plane_facet)
+        Gui.updateGui()
+        rows = table.selectionModel().selectedRows()
+        result["row_of_facet"] = [int(table.item(rows[0].row(), 0).text()) if rows else None, labels[plane_facet]]
+        panel.form.optionsToggle.setChecked(True)
+        result["options_shown"] = panel.form.options.isVisible()
+        panel.reject()
+        Gui.updateGui()
+        result["panel_closed"] = layer.ViewObject.Proxy.panel is None
+        result["colors_after_panel"] = type_color_counts(layer.FaceColors)
+
+        # The console API on the document object.
+        import idealize
+        solid = idealize.make_solid(layer)
+        result["api_solid"] = [bool(solid.solid), solid.faces]
+
+        # Save and reopen: the layer comes back as it was, without recomputing.
+        before = {"labels": list(layer.Labels), "table": layer.FeatureTable, "colors": len(layer.FaceColors)}
+        doc.saveAs(CONFIG["fcstd"])
+        App.closeDocument(doc.Name)
+        doc = App.openDocument(CONFIG["fcstd"])
+        layer = doc.getObject(name)
+        source = doc.getObject("Part")
+        result["reopened"] = {"labels": list(layer.Labels) == before["labels"],
+                              "table": layer.FeatureTable == before["table"],
+                              "colors": len(layer.FaceColors) == before["colors"],
+                              "proxy": type(layer.Proxy).__name__, "view": type(layer.ViewObject.Proxy).__name__,
+                              "touched": "Touched" in layer.State, "source": layer.Source.Name}
+        result["reopened_solid"] = idealize.make_solid(layer).faces
+        made = run_on(doc, layer, "Idealize_MakeSolid")
+        result["solid_from_layer"] = sorted(o.Label for o in made)
+        doc.undo()
+        # Editing the source recomputes the layer.
+        moved = source.Mesh.copy()
+        moved.translate(5, 0, 0)
+        source.Mesh = moved
+        doc.recompute()
+        result["recomputed"] = {"touched": "Touched" in layer.State,
+                                "x_min": layer.Mesh.BoundBox.XMin, "labels": len(layer.Labels)}
+        App.closeDocument(doc.Name)
+        doc = App.openDocument(CONFIG["fcstd"])
+        source = doc.getObject("Part")
+        doc.removeObject(name)
+        doc.recompute()
+        source.ViewObject.Visibility = True
+    else:
+        doc.undo()
+    result["objects_after_idealize"] = [o.Label for o in doc.Objects]
 
     # Make B-rep solid: a Part solid coloured by face type and a group of primitives, one undo.
     new = run_on(doc, source, "Idealize_MakeSolid")
@@ -175,6 +295,29 @@ def run():
     doc.undo()
     result["objects_after_solid_undo"] = [o.Label for o in doc.Objects]
 
+    # Cancel: a long Segment & Idealize shows its progress, and Cancel leaves the document as it was.
+    big = doc.addObject("Mesh::Feature", "Big")
+    big.Mesh = Mesh.createSphere(10, 450)
+    doc.recompute()
+    undo_count = len(doc.UndoNames)
+    seen = {"visible": False, "fraction": 0}
+
+    def press_cancel():
+        for widget in QtGui.QApplication.topLevelWidgets():
+            if isinstance(widget, QtGui.QProgressDialog) and widget.isVisible():
+                seen["visible"], seen["fraction"] = True, widget.value()
+                seen["label"] = widget.labelText()
+                widget.findChild(QtGui.QPushButton).click()  # as the user does
+                return
+        QtCore.QTimer.singleShot(100, press_cancel)
+
+    QtCore.QTimer.singleShot(700, press_cancel)
+    new = run_on(doc, big, "Idealize_SegmentIdealize")
+    result["cancel"] = {"new": [o.Label for o in new], "undo_added": len(doc.UndoNames) - undo_count,
+                        "status": Gui.getMainWindow().statusBar().currentMessage(), **seen}
+    doc.removeObject("Big")
+    doc.recompute()
+
     # A mesh the core rejects: the transaction is aborted and the error is shown.
     empty = doc.addObject("Mesh::Feature", "Empty")
     doc.recompute()
@@ -200,6 +343,8 @@ def run_driver(tmp_path, attempt):
     config = {"repo": REPO, "result": str(tmp_path / ("result%d.json" % attempt)),
               "screenshot": str(tmp_path / "segment-gui.png"),
               "screenshot_types": str(tmp_path / "idealize-gui.png"),
+              "screenshot_deviation": str(tmp_path / "deviation-gui.png"),
+              "screenshot_panel": str(tmp_path / "panel-gui.png"), "fcstd": str(tmp_path / "layer.FCStd"),
               "screenshot_solid": str(tmp_path / "solid-gui.png"), "step": str(tmp_path / "part.step")}
     script = tmp_path / ("driver%d.py" % attempt)
     script.write_text(DRIVER.replace("__CONFIG__", repr(json.dumps(config))))
@@ -251,13 +396,54 @@ def test_segment_command_in_freecad_gui(tmp_path):
     assert result["objects_after_undo"] == ["Part"]
     assert result["source_visible_after_undo"] is True
 
-    # Box with a hole: 6 planes (light green) and the hole's cylinder (yellow), nothing else.
-    assert result["idealize_labels"] == ["Part_Features"]
+    # Box with a hole: a feature layer with 6 planes (light green) and the hole's cylinder (yellow).
+    assert result["idealize_labels"] == ["Part_Layer"]
     assert result["idealize_undo_name"] == "Segment and idealize mesh"
+    layer = result["layer"]
+    assert layer["type"] == "Mesh::FeaturePython" and layer["proxy"] == "FeatureLayerObject"
+    assert layer["source"] == "Part" and layer["labels"] == layer["facets"] == result["source_before"][1]
+    assert layer["features"] == 7 and layer["color_by"] == "Type" and layer["coloring"] is True
+    assert layer["touched"] is False
     colors = result["idealize_type_colors"]
     assert set(colors) == {"plane", "cylinder"}, colors
     assert sum(colors.values()) == result["source_before"][1]
-    assert result["objects_after_idealize_undo"] == ["Part"]
+    assert result["after_layer_undo"] == [["Part"], True]
+    assert result["after_layer_redo"] is True
+    assert result["feature_colors"] == 7
+    assert result["deviation_active"] is True and result["deviation_mode"] == "Deviation"
+    assert result["deviation_colors"] >= 1
+    # What the view shows: light green planes by type; by deviation (an exact tessellation: all
+    # vertices on their surfaces) the blue of zero.
+    assert result["hue_types"] in (90, 120), result["hue_types"]
+    assert result["hue_deviation"] in (210, 240), result["hue_deviation"]
+    assert result["legend_shown"] is True and result["legend_after_type"] is False
+
+    panel = result["panel"]
+    assert panel["rows"] == 7 and panel["columns"] == 6 and panel["types"] == ["cylinder", "plane"]
+    assert panel["options_hidden"] is True and result["options_shown"] is True
+    # Selecting the cylinder's row leaves its facets in their colour and dims all others.
+    highlight = result["highlight"]
+    assert highlight["bright"] == {"cylinder": highlight["cylinder_facets"],
+                                   "other": result["source_before"][1] - highlight["cylinder_facets"]}
+    assert result["row_of_facet"][0] == result["row_of_facet"][1]
+    assert result["panel_closed"] is True
+    assert result["colors_after_panel"] == colors
+
+    assert result["api_solid"] == [True, 7]
+    reopened = result["reopened"]
+    assert reopened == {"labels": True, "table": True, "colors": True, "proxy": "FeatureLayerObject",
+                        "view": "ViewProviderFeatureLayer", "touched": False, "source": "Part"}
+    assert result["reopened_solid"] == 7
+    assert {"Part_Solid", "Part_Primitives"} <= set(result["solid_from_layer"])
+    recomputed = result["recomputed"]
+    assert recomputed["touched"] is False and abs(recomputed["x_min"] - 5.0) < 1e-6
+    assert recomputed["labels"] == result["source_before"][1]
+    assert result["objects_after_idealize"] == ["Part"]
+
+    cancel = result["cancel"]
+    assert cancel["visible"] is True, "no progress dialog during a long run"
+    assert cancel["new"] == [] and cancel["undo_added"] == 0
+    assert "cancelled" in cancel["status"]
 
     # The fitted solid: 7 faces, exact volume, coloured, with 7 primitives; one undo removes all.
     assert {"Part_Solid", "Part_Primitives"} <= set(result["solid_labels"])

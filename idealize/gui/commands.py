@@ -4,55 +4,88 @@ import time
 import FreeCAD
 import FreeCADGui
 
-from .. import freecad_mesh, freecad_solid
-from ..features import count_summary
+from .. import freecad_mesh, freecad_solid, layer_object
+from ..brep import make_solid
+from ..features import count_summary, idealize
+from ..segmentation import segment
 from . import icon
+from ..progress import Cancelled
+from .progress import run_with_progress
 
 
 def _selected_mesh():
     """The selected Mesh::Feature if it is the only selected object, else None."""
     selection = FreeCADGui.Selection.getSelection()
-    if len(selection) == 1 and selection[0].isDerivedFrom("Mesh::Feature"):
+    if len(selection) == 1 and selection[0].isDerivedFrom("Mesh::Feature") \
+            and not layer_object.is_feature_layer(selection[0]):
         return selection[0]
     return None
 
 
-def _report_error(title, error):
+def _selected_layer():
+    """The selected feature layer object if it is the only selected object, else None."""
+    selection = FreeCADGui.Selection.getSelection()
+    if len(selection) == 1 and layer_object.is_feature_layer(selection[0]):
+        return selection[0]
+    return None
+
+
+def report_error(title, error):
+    """Show an error in the report view and a message box (a cancel only in the status bar)."""
     from PySide import QtGui
+    if isinstance(error, Cancelled):
+        FreeCAD.Console.PrintMessage("Idealize: %s cancelled; the document is unchanged\n" % title)
+        FreeCADGui.getMainWindow().statusBar().showMessage("%s cancelled" % title, 5000)
+        return
     message = str(error) or type(error).__name__
     FreeCAD.Console.PrintError("Idealize: %s failed: %s\n" % (title, message))
     QtGui.QMessageBox.critical(FreeCADGui.getMainWindow(), "Idealize - " + title, message)
 
 
-def _show_colored_mesh(result):
-    # Per-facet colours come from the FaceColors property; Coloring switches them on.
-    result.ViewObject.Coloring = True
-
-
-def _run_on_selection(title, transaction, compute, make_result, describe, show=_show_colored_mesh):
-    """Shared body of the commands: compute on the selected mesh, add the result in one undoable
-    transaction, hide the source, report; on any error abort the transaction and show it."""
-    source = _selected_mesh()  # not None: FreeCAD runs commands only when IsActive()
-    doc = source.Document
+def _run(title, transaction, compute, make_result, describe, show):
+    """Shared body of the commands: compute (in a worker thread with progress and Cancel), then
+    add the result in one undoable transaction and report; on any error or cancel the
+    transaction is aborted and the document stays as it was."""
+    doc = FreeCAD.ActiveDocument
     start = time.perf_counter()
+    try:
+        computed = compute()
+    except Exception as error:
+        report_error(title, error)
+        return
     doc.openTransaction(transaction)
     try:
-        computed = compute(source)
-        result = make_result(doc, source, computed)
+        result = make_result(doc, computed)
         doc.recompute()
         show(result)
-        # The result lies exactly on the source: hide the source so the colours do not z-fight.
-        source.ViewObject.Visibility = False
         doc.commitTransaction()
     except Exception as error:  # anything: the document must not keep half a result
         doc.abortTransaction()
-        _report_error(title, error)
+        report_error(title, error)
         return
-    message, details = describe(source, computed, time.perf_counter() - start)
+    message, details = describe(computed, time.perf_counter() - start)
     FreeCAD.Console.PrintMessage(message + "\n" + "".join(line + "\n" for line in details))
     FreeCADGui.getMainWindow().statusBar().showMessage(message, 15000)
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.Selection.addSelection(result)
+
+
+def _hide_source(source, result):
+    # The result lies exactly on the source: hide the source so the colours do not z-fight.
+    result.ViewObject.Coloring = True  # per-facet colours from the FaceColors property
+    source.ViewObject.Visibility = False
+
+
+def _new_layer(source):
+    """Compute a feature layer of a mesh object with the preferences' options (with progress)."""
+    options = layer_object.layer_options(layer_object.preferences())
+    return run_with_progress("Segment & Idealize", idealize, freecad_mesh.usable_mesh(source), **options)
+
+
+def _describe_layer(source, layer, seconds):
+    return ("Idealize: %s has %d features (%s), deviation %.3g max, in %.2f s" % (
+        source.Label, len(layer.features), count_summary(layer.type_counts()), layer.deviation["max"], seconds),
+        freecad_mesh.feature_table(layer))
 
 
 class _MeshCommand:
@@ -66,46 +99,85 @@ class SegmentCommand(_MeshCommand):
     def GetResources(self):
         return {"Pixmap": icon("Idealize_Segment"),
                 "MenuText": "Segment",
-                "ToolTip": "Split the selected mesh into feature patches (fully automatic)"}
+                "ToolTip": "Split the selected mesh into feature patches (fully automatic); adds a copy coloured "
+                           "by patch"}
 
     def Activated(self):
-        def describe(source, segmentation, seconds):
+        source = _selected_mesh()
+
+        def describe(segmentation, seconds):
             return ("Idealize: %s split into %d patches (%d transition triangles) in %.2f s" % (
                 source.Label, segmentation.n_features, int(segmentation.transition.sum()), seconds), [])
 
-        _run_on_selection("Segment", "Segment mesh", freecad_mesh.segment_mesh_object,
-                          freecad_mesh.make_segmented_mesh, describe)
+        _run("Segment", "Segment mesh",
+             lambda: run_with_progress("Segment", segment, freecad_mesh.usable_mesh(source)),
+             lambda doc, segmentation: freecad_mesh.make_segmented_mesh(doc, source, segmentation), describe,
+             lambda result: _hide_source(source, result))
 
 
 class SegmentIdealizeCommand(_MeshCommand):
     def GetResources(self):
         return {"Pixmap": icon("Idealize_SegmentIdealize"),
                 "MenuText": "Segment && Idealize",
-                "ToolTip": "Find the features of the selected mesh (planes, cylinders, cones, spheres, tori) "
-                           "with exact parameters; adds a copy coloured by feature type"}
+                "ToolTip": "Find the features of the selected mesh (planes, cylinders, cones, spheres, tori) with "
+                           "exact parameters; adds a feature layer (coloured by type; double-click for the table)"}
 
     def Activated(self):
-        def describe(source, layer, seconds):
-            return ("Idealize: %s has %d features (%s), deviation %.3g max, in %.2f s" % (
-                source.Label, len(layer.features), count_summary(layer.type_counts()), layer.deviation["max"],
-                seconds),
-                freecad_mesh.feature_table(layer))
-
-        _run_on_selection("Segment & Idealize", "Segment and idealize mesh", freecad_mesh.idealize_mesh_object,
-                          freecad_mesh.make_feature_mesh, describe)
+        source = _selected_mesh()
+        _run("Segment & Idealize", "Segment and idealize mesh", lambda: _new_layer(source),
+             lambda doc, layer: layer_object.make_feature_layer(source, layer),
+             lambda layer, seconds: _describe_layer(source, layer, seconds),
+             lambda obj: _hide_source(source, obj))
 
 
-class MakeSolidCommand(_MeshCommand):
+class DeviationMapCommand:
+    def GetResources(self):
+        return {"Pixmap": icon("Idealize_DeviationMap"),
+                "MenuText": "Deviation map",
+                "ToolTip": "Colour the selected feature layer (or a new layer of the selected mesh) by the distance "
+                           "of the mesh from the idealized surfaces, with a legend"}
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and (_selected_layer() is not None or _selected_mesh() is not None)
+
+    def Activated(self):
+        layer = _selected_layer()
+        if layer is not None:
+            layer.ViewObject.ColorBy = "Deviation"  # a view setting: not an undoable document change
+            layer.ViewObject.Visibility = True
+            return
+        source = _selected_mesh()
+
+        def show(obj):
+            _hide_source(source, obj)
+            obj.ViewObject.ColorBy = "Deviation"
+
+        _run("Deviation map", "Deviation map", lambda: _new_layer(source),
+             lambda doc, computed: layer_object.make_feature_layer(source, computed),
+             lambda computed, seconds: _describe_layer(source, computed, seconds), show)
+
+
+class MakeSolidCommand:
     def GetResources(self):
         return {"Pixmap": icon("Idealize_MakeSolid"),
                 "MenuText": "Make B-rep solid",
-                "ToolTip": "Fit a solid to the selected mesh: one exact plane, cylinder, cone, sphere or torus "
-                           "face per feature, plus a group of Part primitives"}
+                "ToolTip": "Fit a solid to the selected feature layer or mesh: one exact plane, cylinder, cone, "
+                           "sphere or torus face per feature, plus a group of Part primitives"}
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and (_selected_layer() is not None or _selected_mesh() is not None)
 
     def Activated(self):
+        selected_layer = _selected_layer()
+        source = selected_layer.Source if selected_layer is not None else _selected_mesh()
         primitives = []
 
-        def make_result(doc, source, computed):
+        def compute():
+            layer = (layer_object.feature_layer(selected_layer) if selected_layer is not None
+                     else _new_layer(source))
+            return layer, run_with_progress("Make B-rep solid", make_solid, layer)
+
+        def make_result(doc, computed):
             layer, solid = computed
             obj, group, _ = freecad_solid.make_solid_object(doc, source, layer, solid)
             primitives.extend(group.Group)
@@ -116,16 +188,18 @@ class MakeSolidCommand(_MeshCommand):
             # The primitives lie on the solid's faces: shown, they would hide its colours.
             for primitive in primitives:
                 primitive.ViewObject.Visibility = False
+            for hidden in (source, selected_layer):
+                if hidden is not None:
+                    hidden.ViewObject.Visibility = False
 
-        def describe(source, computed, seconds):
+        def describe(computed, seconds):
             _, solid = computed
             state = "solid" if solid.solid else "NO valid closed solid, only faces"
             return ("Idealize: %s -> %s with %d faces (%s), volume %.6g, in %.2f s" % (
                 source.Label, state, solid.faces, count_summary(solid.surface_types), solid.volume, seconds),
                 ["  feature %d: %s" % (f, m) if f >= 0 else "  %s" % m for f, m in solid.problems])
 
-        _run_on_selection("Make B-rep solid", "Make B-rep solid", freecad_solid.solid_of_mesh_object, make_result,
-                          describe, show)
+        _run("Make B-rep solid", "Make B-rep solid", compute, make_result, describe, show)
 
 
 def _selected_shapes():
@@ -151,12 +225,13 @@ class ExportStepCommand:
         try:
             freecad_solid.export_step(objects, path)
         except Exception as error:
-            _report_error("Export STEP", error)
+            report_error("Export STEP", error)
             return
         FreeCAD.Console.PrintMessage("Idealize: %d object(s) written to %s\n" % (len(objects), path))
 
 
 FreeCADGui.addCommand("Idealize_Segment", SegmentCommand())
 FreeCADGui.addCommand("Idealize_SegmentIdealize", SegmentIdealizeCommand())
+FreeCADGui.addCommand("Idealize_DeviationMap", DeviationMapCommand())
 FreeCADGui.addCommand("Idealize_MakeSolid", MakeSolidCommand())
 FreeCADGui.addCommand("Idealize_ExportStep", ExportStepCommand())

@@ -1,16 +1,22 @@
 // The only place where C++ meets Python. Arrays cross as numpy: V float64 (#V, 3), F int32 (#F, 3),
-// row-major. Long computations release the GIL; C++ exceptions become Python exceptions.
+// row-major. Long computations release the GIL (inputs are converted to C++ before, results to
+// Python after); C++ exceptions become Python exceptions. They take an optional Progress that
+// another Python thread reads and may cancel while they run.
 #include "brep_builder.h"
 #include "curvature.h"
 #include "feature_layer.h"
 #include "mesh.h"
 #include "mesh_io.h"
+#include "progress.h"
 #include "remesh_cgal.h"
 #include "segmentation.h"
 
 #include <pybind11/eigen.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+
+#include <mutex>
+#include <set>
 
 namespace py = pybind11;
 using namespace idealize;
@@ -186,6 +192,7 @@ py::dict feature_layer_dict(FeatureLayer&& layer) {
   d["adjacency"] = adjacency;
   d["relations"] = relations;
   d["idealized_vertices"] = std::move(layer.idealized_vertices);
+  d["vertex_deviation"] = std::move(layer.vertex_deviation);
   d["max_deviation"] = layer.max_deviation;
   d["rms_deviation"] = layer.rms_deviation;
   d["distance_tolerance"] = layer.distance_tolerance;
@@ -193,11 +200,44 @@ py::dict feature_layer_dict(FeatureLayer&& layer) {
   return d;
 }
 
+// Progress keeps stage names as pointers to strings that live as long as the program: names
+// reported from Python are kept in a set (a handful of distinct names).
+const char* interned(const std::string& name) {
+  static std::mutex mutex;
+  static std::set<std::string> names;
+  const std::lock_guard<std::mutex> lock(mutex);
+  return names.insert(name).first->c_str();
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_native, m) {
   m.doc() = "Idealize native core: mesh reading, curvature, feature segmentation.";
   py::register_exception<MeshError>(m, "MeshError", PyExc_ValueError);
+  py::register_exception<Cancelled>(m, "Cancelled", PyExc_RuntimeError);
+
+  // Shared between the thread that runs a computation and the one that shows it: every member is
+  // atomic, so none of these needs the GIL held by the computing thread.
+  py::class_<Progress>(m, "Progress",
+                       "Progress of a long computation, readable and cancellable from another thread.")
+      .def(py::init<>())
+      .def("cancel", &Progress::cancel, "Ask the computation to stop; it raises Cancelled soon after.")
+      .def_property_readonly("cancelled", &Progress::cancelled)
+      .def_property_readonly("fraction", &Progress::fraction, "Overall fraction done, 0..1 (never decreases).")
+      .def_property_readonly("stage", &Progress::stage, "Name of the step running now.")
+      .def_property_readonly("range", [](const Progress& p) { return py::make_tuple(p.range_start(), p.range_end()); },
+                             "(start, end): the part of the overall fraction the next call fills.")
+      .def("set_range", &Progress::set_range, py::arg("start"), py::arg("end"), py::arg("restart") = true,
+           "Let the next call fill [start, end] of the overall fraction; restart: set the fraction to start.")
+      .def(
+          "report",
+          [](Progress& p, const std::string& stage, double fraction) { p.report(interned(stage), fraction); },
+          py::arg("stage"), py::arg("fraction"),
+          "Report `fraction` (0..1) of the current range done, in step `stage` (for Python-side steps).")
+      .def("__repr__", [](const Progress& p) {
+        return "<idealize.Progress " + std::to_string(p.fraction()) + " '" + p.stage() + "'" +
+               (p.cancelled() ? " cancelled>" : ">");
+      });
 
   m.def(
       "read_mesh",
@@ -218,36 +258,51 @@ PYBIND11_MODULE(_native, m) {
 
   m.def(
       "segment",
-      [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F) {
+      [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, Progress* progress) {
         const TriangleMesh mesh = make_mesh(V, F);
+        SegmentationOptions options;
+        options.progress = progress;
         Segmentation s;
         {
           py::gil_scoped_release release;
-          s = segment_mesh(mesh);
+          s = segment_mesh(mesh, options);
         }
         return segmentation_dict(std::move(s));
       },
-      py::arg("V"), py::arg("F"), "Two-pass mean-curvature-histogram segmentation.");
+      py::arg("V"), py::arg("F"), py::kw_only(), py::arg("progress") = nullptr,
+      "Two-pass mean-curvature-histogram segmentation.");
 
   m.def(
       "identify_features",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, std::vector<int> labels,
          const std::vector<double>& patch_mean, const std::vector<double>& patch_gaussian, double zero_low,
-         double zero_high) {
+         double zero_high, Progress* progress, double angle_tolerance_degrees, double distance_tolerance,
+         double radius_tolerance, bool idealize) {
         const TriangleMesh mesh = make_mesh(V, F);
         if (patch_mean.size() != patch_gaussian.size())
           throw MeshError("one mean and one Gaussian curvature per patch are needed");
         std::vector<PatchCurvature> curvature(patch_mean.size());
         for (size_t p = 0; p < curvature.size(); ++p) curvature[p] = {patch_mean[p], patch_gaussian[p]};
+        FeatureOptions options;
+        options.progress = progress;
+        options.angle_tolerance_degrees = angle_tolerance_degrees;
+        options.distance_tolerance = distance_tolerance;
+        options.radius_tolerance = radius_tolerance;
+        options.idealize = idealize;
         FeatureLayer layer;
         {
           py::gil_scoped_release release;
-          layer = identify_features(mesh, labels, curvature, EffectiveZero{zero_low, zero_high});
+          layer = identify_features(mesh, labels, curvature, EffectiveZero{zero_low, zero_high}, options);
         }
         return feature_layer_dict(std::move(layer));
       },
       py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("patch_mean"), py::arg("patch_gaussian"),
-      py::arg("zero_low"), py::arg("zero_high"), "Feature identification, graph and projection (thesis ch. 4).");
+      py::arg("zero_low"), py::arg("zero_high"), py::kw_only(), py::arg("progress") = nullptr,
+      py::arg("angle_tolerance_degrees") = FeatureOptions{}.angle_tolerance_degrees,
+      py::arg("distance_tolerance") = FeatureOptions{}.distance_tolerance,
+      py::arg("radius_tolerance") = FeatureOptions{}.radius_tolerance, py::arg("idealize") = FeatureOptions{}.idealize,
+      "Feature identification, graph and projection (thesis ch. 4); options as FeatureOptions "
+      "(distance_tolerance 0: 0.1 % of the bounding-box diagonal).");
 
   py::class_<BrepResult>(m, "Brep", "A fitted B-rep: solid, or the shell of the faces that could be made.")
       .def_readonly("valid", &BrepResult::valid)
@@ -283,47 +338,56 @@ PYBIND11_MODULE(_native, m) {
           py::arg("path"), "Write STEP AP214 in millimetres, faces coloured by surface type.")
       .def(
           "triangulate",
-          [](const BrepResult& r, double deflection) {
+          [](const BrepResult& r, double deflection, Progress* progress) {
             if (!(deflection > 0)) throw std::invalid_argument("deflection must be positive");
             TriangleMesh mesh;
             {
               py::gil_scoped_release release;
-              mesh = triangulate(r.shape, deflection);
+              mesh = triangulate(r.shape, deflection, ProgressSpan(progress, "triangulation"));
             }
             return py::make_tuple(std::move(mesh.V), std::move(mesh.F));
           },
-          py::arg("deflection"), "Triangulation (V, F) with chordal deviation at most `deflection`.");
+          py::arg("deflection"), py::kw_only(), py::arg("progress") = nullptr,
+          "Triangulation (V, F) with chordal deviation at most `deflection`.");
 
   m.def(
       "build_brep",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, std::vector<int> labels,
-         const std::vector<std::string>& types, const std::vector<py::dict>& params, double tolerance) {
+         const std::vector<std::string>& types, const std::vector<py::dict>& params, double tolerance,
+         Progress* progress) {
         if (types.size() != params.size()) throw std::invalid_argument("one type and one parameter set per feature");
         std::vector<Surface> surfaces;
         for (size_t i = 0; i < types.size(); ++i) surfaces.push_back(surface_from_params(types[i], params[i]));
         const TriangleMesh mesh = make_mesh(V, F);
         BrepOptions options;
         options.tolerance = tolerance;
-        py::gil_scoped_release release;
-        return build_brep(mesh, labels, surfaces, options);
+        options.progress = progress;
+        BrepResult result;
+        {
+          py::gil_scoped_release release;
+          result = build_brep(mesh, labels, surfaces, options);
+        }
+        return result;
       },
       py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("tolerance") = 0.0,
+      py::kw_only(), py::arg("progress") = nullptr,
       "Fitted B-rep of a labelled mesh whose features lie on the given surfaces.");
 
   m.def(
       "mesh_distances",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F,
-         const Eigen::Ref<const MatrixX3d>& points) {
+         const Eigen::Ref<const MatrixX3d>& points, Progress* progress) {
         const TriangleMesh mesh = make_mesh(V, F);
         const MatrixX3d query = points;
         std::vector<double> distances;
         {
           py::gil_scoped_release release;
-          closest_faces(mesh, query, &distances);
+          closest_faces(mesh, query, &distances, ProgressSpan(progress, "deviation"));
         }
         return Eigen::Map<const Eigen::VectorXd>(distances.data(), static_cast<Eigen::Index>(distances.size())).eval();
       },
-      py::arg("V"), py::arg("F"), py::arg("points"), "Distance of each point from the mesh (AABB tree).");
+      py::arg("V"), py::arg("F"), py::arg("points"), py::kw_only(), py::arg("progress") = nullptr,
+      "Distance of each point from the mesh (AABB tree).");
 
   m.def(
       "fit_surface",

@@ -424,7 +424,7 @@ Vec3 corner_point(const std::vector<const Surface*>& surfaces, const Vec3& x0, d
 class BrepBuilder {
  public:
   BrepBuilder(const TriangleMesh& mesh, const std::vector<Surface>& surfaces, const BrepOptions& options)
-      : mesh_(mesh), surfaces_(surfaces) {
+      : mesh_(mesh), surfaces_(surfaces), progress_(options.progress, "topology") {
     diagonal_ = bounding_box_diagonal(mesh);
     tol_ = options.tolerance > 0 ? options.tolerance : 1e-3 * diagonal_;
     angle_eps_ = std::max(1e-9, tol_ / std::max(diagonal_, 1e-300));
@@ -449,6 +449,8 @@ class BrepBuilder {
 
   const TriangleMesh& mesh_;
   const std::vector<Surface>& surfaces_;
+  // Shares of the whole run, as measured on a scan of a million triangles.
+  const ProgressSpan progress_;
   double diagonal_ = 0, tol_ = 0, angle_eps_ = 0;
   BoundaryTopology topo_;
   std::vector<Handle(Geom_Surface)> region_surfaces_;
@@ -572,7 +574,9 @@ void BrepBuilder::make_edges(BrepResult& result) {
   BRep_Builder builder;
   edges_.assign(topo_.chains.size(), TopoDS_Edge());
   edge_ok_.assign(topo_.chains.size(), 0);
+  const ProgressSpan progress = progress_.sub("edges", 0.55, 0.8);
   for (size_t c = 0; c < topo_.chains.size(); ++c) {
+    progress.step(static_cast<double>(c) / topo_.chains.size());
     const BoundaryChain& chain = topo_.chains[c];
     if (collapsed_[c]) {
       edge_ok_[c] = 1;
@@ -687,7 +691,9 @@ void BrepBuilder::make_edges(BrepResult& result) {
 
 void BrepBuilder::make_faces(BrepResult& result) {
   BRep_Builder builder;
+  const ProgressSpan progress = progress_.sub("faces", 0.8, 0.83);
   for (size_t r = 0; r < topo_.region_loops.size(); ++r) {
+    progress.step(static_cast<double>(r) / topo_.region_loops.size());
     const int feature = topo_.region_feature[r];
     if (region_surfaces_[r].IsNull()) {
       result.problems.push_back({feature, "freeform feature: no analytic surface, no B-spline face fitted"});
@@ -765,7 +771,9 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   // edge in one face and not in its neighbour, and healing the whole shell at once
   // (ShapeFix_Shell) crashes on such shells in OCCT 7.6.
   BRepBuilderAPI_Sewing sewing(tol_);
+  const ProgressSpan progress = progress_.sub("sewing", 0.83, 0.9);
   for (size_t i = 0; i < faces_.size(); ++i) {
+    progress.sub(0.0, 0.5).step(static_cast<double>(i) / faces_.size());
     try {
       OCC_CATCH_SIGNALS
       // Healing only where needed: invalid faces, and faces bounded by nothing (a whole sphere
@@ -786,7 +794,9 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
       result.problems.push_back({topo_.region_feature[face_region_[i]], occt_message(failure, "its face could not be healed")});
     }
   }
+  progress.step(0.5);
   sewing.Perform();
+  progress.step(0.8);
   TopoDS_Shape shape = sewing.SewedShape();
   if (shape.ShapeType() == TopAbs_FACE) {  // a single face (a whole sphere) is sewn to itself
     BRep_Builder builder;
@@ -824,6 +834,7 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
 
 BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& options) {
   BrepResult result;
+  progress_.step(0.0);  // a cancelled Progress stops here, before any work
   auto since = Clock::now();
   // Faces whose corners coincide carry no area and no topology.
   TriangleMesh clean;
@@ -839,11 +850,16 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     clean.F.row(static_cast<Eigen::Index>(i)) = mesh_.F.row(kept[i]);
     clean_labels.push_back(labels[kept[i]]);
   }
+  progress_.step(0.05);
   const MeshTopology topology(clean);
+  progress_.step(0.15);
   const std::vector<int> merged = dissolve_sampling_blends(clean, merge_same_surfaces(clean_labels));
+  progress_.step(0.25);
   const std::vector<int> face_feature = complete_face_features(clean, topology, merged, surfaces_);
+  progress_.step(0.35);
   topo_ = trace_boundaries(clean, topology, face_feature);
   stage(result, "brep.topology", since);
+  progress_.step(0.45);
 
   // One surface per region, oriented against the mesh normals.
   const int regions = static_cast<int>(topo_.region_feature.size());
@@ -862,6 +878,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   for (int r = 0; r < regions; ++r) {
     region_surfaces_[r] = make_surface(surfaces_[topo_.region_feature[r]], region_points[r]);
   }
+  progress_.sub("vertices", 0.0, 1.0).step(0.5);
   make_vertices(topology);
   make_edges(result);
   stage(result, "brep.edges", since);
@@ -870,6 +887,8 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
 
   TopoDS_Shape shape = assemble(result, options);
   stage(result, "brep.sew", since);
+  const ProgressSpan checking = progress_.sub("checking", 0.9, 1.0);
+  checking.step(0.0);
 
   // Validate; an invalid result keeps only its valid faces, as a shell (never an invalid solid).
   result.valid = BRepCheck_Analyzer(shape).IsValid();
@@ -904,12 +923,14 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     }
     result.face_features.push_back(feature);
   }
+  checking.step(0.6);
   if (result.solid) {
     GProp_GProps properties;
     BRepGProp::VolumeProperties(shape, properties);
     result.volume = std::abs(properties.Mass());
   }
   stage(result, "brep.check", since);
+  checking.step(1.0);
   return result;
 }
 

@@ -14,6 +14,7 @@
 #pragma once
 
 #include "mesh.h"
+#include "progress.h"
 #include "surface.h"
 
 #include <TopoDS_Shape.hxx>
@@ -31,6 +32,8 @@ struct BrepOptions {
   double tolerance = 0.0;
   // Merge faces and edges that lie on the same surface or curve (ShapeUpgrade_UnifySameDomain).
   bool unify = true;
+  // Receives the progress (0..1 over the call) and is polled for cancellation (throws Cancelled).
+  Progress* progress = nullptr;
 };
 
 // One problem with one feature: it has no face in the result, or its face is not valid.
@@ -74,7 +77,8 @@ std::string brep_string(const TopoDS_Shape& shape);
 // std::runtime_error when the file cannot be written.
 void write_step(const TopoDS_Shape& shape, const std::string& path);
 
-// A triangulation of the shape's faces with chordal deviation at most `deflection`.
-TriangleMesh triangulate(const TopoDS_Shape& shape, double deflection);
+// A triangulation of the shape's faces with chordal deviation at most `deflection`. Reports into
+// `progress` and throws Cancelled when it is cancelled.
+TriangleMesh triangulate(const TopoDS_Shape& shape, double deflection, const ProgressSpan& progress = {});
 
 }  // namespace idealize

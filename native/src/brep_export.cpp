@@ -8,6 +8,8 @@
 #include <BRep_Tool.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
+#include <Message_ProgressIndicator.hxx>
+#include <Message_ProgressScope.hxx>
 #include <Message_Messenger.hxx>
 #include <Poly_Triangulation.hxx>
 #include <Quantity_Color.hxx>
@@ -63,8 +65,29 @@ class QuietMessenger {
   Message_SequenceOfPrinters saved_;
 };
 
-TriangleMesh triangulate_faces(const TopoDS_Shape& shape, double deflection) {
-  BRepMesh_IncrementalMesh mesher(shape, deflection, Standard_False, 0.2, Standard_False);
+// OCCT's progress indicator passing on to ours: the mesher polls UserBreak() between faces.
+class OcctProgress : public Message_ProgressIndicator {
+ public:
+  explicit OcctProgress(const ProgressSpan& span) : span_(span) {}
+  Standard_Boolean UserBreak() override { return span_.progress && span_.progress->cancelled(); }
+  void Show(const Message_ProgressScope&, const Standard_Boolean) override {
+    if (span_.progress) span_.progress->report(span_.stage, span_.start + (span_.end - span_.start) * GetPosition());
+  }
+
+ private:
+  ProgressSpan span_;
+};
+
+TriangleMesh triangulate_faces(const TopoDS_Shape& shape, double deflection, const ProgressSpan& progress) {
+  progress.step(0.0);
+  IMeshTools_Parameters parameters;  // as BRepMesh_IncrementalMesh(shape, deflection, false, 0.2, false) sets them
+  parameters.Deflection = deflection;
+  parameters.Angle = 0.2;
+  parameters.Relative = Standard_False;
+  parameters.InParallel = Standard_False;
+  Handle(OcctProgress) indicator = new OcctProgress(progress.sub(0.0, 0.9));
+  BRepMesh_IncrementalMesh mesher(shape, parameters, indicator->Start());
+  progress.step(0.9);  // throws Cancelled when the mesher stopped early
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector3i> triangles;
   for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
@@ -90,6 +113,7 @@ TriangleMesh triangulate_faces(const TopoDS_Shape& shape, double deflection) {
   mesh.F.resize(static_cast<Eigen::Index>(triangles.size()), 3);
   for (size_t i = 0; i < points.size(); ++i) mesh.V.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
   for (size_t i = 0; i < triangles.size(); ++i) mesh.F.row(static_cast<Eigen::Index>(i)) = triangles[i].transpose();
+  progress.step(1.0);
   return mesh;
 }
 
@@ -124,11 +148,11 @@ void write_step(const TopoDS_Shape& shape, const std::string& path) {
   }
 }
 
-TriangleMesh triangulate(const TopoDS_Shape& shape, double deflection) {
+TriangleMesh triangulate(const TopoDS_Shape& shape, double deflection, const ProgressSpan& progress) {
   const OcctSignalHandlers handlers;
   try {
     OCC_CATCH_SIGNALS
-    return triangulate_faces(shape, deflection);
+    return triangulate_faces(shape, deflection, progress);
   } catch (const Standard_Failure& failure) {
     throw std::runtime_error(std::string("could not triangulate the shape: ") + failure.GetMessageString());
   }

@@ -40,15 +40,17 @@ MatrixX3d vertex_normals(const TriangleMesh& mesh) {
   return normals;
 }
 
-VertexCurvature vertex_curvature(const TriangleMesh& mesh, const MeshTopology& topology) {
+VertexCurvature vertex_curvature(const TriangleMesh& mesh, const MeshTopology& topology,
+                                 const ProgressSpan& progress) {
   const int nv = mesh.num_vertices();
   VertexCurvature out;
   out.normal = vertex_normals(mesh);
+  progress.step(0.3);
   out.area = Eigen::VectorXd::Zero(nv);
   MatrixX3d laplace = MatrixX3d::Zero(nv, 3);  // Σ (cot α + cot β)(x_i − x_j), per vertex
   Eigen::VectorXd angle_sum = Eigen::VectorXd::Zero(nv);
 
-  for (int f = 0; f < mesh.num_faces(); ++f) {
+  for_each_polled(mesh.num_faces(), progress.sub(0.3, 0.9), [&](int f) {
     const int idx[3] = {mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)};
     const Eigen::Vector3d p[3] = {mesh.V.row(idx[0]), mesh.V.row(idx[1]), mesh.V.row(idx[2])};
     const double area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm();
@@ -71,7 +73,7 @@ VertexCurvature vertex_curvature(const TriangleMesh& mesh, const MeshTopology& t
         out.area[i] += angle[c] > kPi / 2 ? area / 2.0 : area / 4.0;
       }
     }
-  }
+  });
 
   out.mean.resize(nv);
   out.gaussian.resize(nv);
@@ -87,8 +89,10 @@ VertexCurvature vertex_curvature(const TriangleMesh& mesh, const MeshTopology& t
     out.gaussian[v] = (2.0 * kPi - angle_sum[v]) / out.area[v];
   }
   // Boundary vertices borrow from their defined neighbours, repeatedly inward-out.
+  progress.step(0.9);
   bool changed = true;
   while (changed) {
+    progress.check();
     changed = false;
     for (int v = 0; v < nv; ++v) {
       if (defined[v]) continue;
@@ -118,6 +122,7 @@ VertexCurvature vertex_curvature(const TriangleMesh& mesh, const MeshTopology& t
     out.kmax[v] = out.mean[v] + spread;
     out.kmin[v] = out.mean[v] - spread;
   }
+  progress.step(1.0);
   return out;
 }
 

@@ -7,6 +7,7 @@
 #pragma once
 
 #include "mesh.h"
+#include "progress.h"
 
 namespace idealize {
 
@@ -23,6 +24,8 @@ MatrixX3d vertex_normals(const TriangleMesh& mesh);
 
 // Curvatures of every vertex. On boundary and non-manifold vertices the discrete operators are
 // not defined; those take the area-weighted mean of their interior neighbours instead.
-VertexCurvature vertex_curvature(const TriangleMesh& mesh, const MeshTopology& topology);
+// Reports into `progress` and throws Cancelled when it is cancelled.
+VertexCurvature vertex_curvature(const TriangleMesh& mesh, const MeshTopology& topology,
+                                 const ProgressSpan& progress = {});
 
 }  // namespace idealize

@@ -33,13 +33,13 @@ FaceGeometry face_geometry(const MatrixX3d& V, const MatrixX3i& F) {
 
 // Faces sharing at least one vertex with each face (itself included), compressed.
 void face_rings(const TriangleMesh& mesh, const MeshTopology& topology, std::vector<int>& offsets,
-                std::vector<int>& ring) {
+                std::vector<int>& ring, const ProgressSpan& progress) {
   const int nf = mesh.num_faces();
   offsets.assign(nf + 1, 0);
   ring.clear();
   ring.reserve(static_cast<size_t>(nf) * 13);
   std::vector<int> stamp(nf, -1);
-  for (int f = 0; f < nf; ++f) {
+  for_each_polled(nf, progress, [&](int f) {
     for (int c = 0; c < 3; ++c) {
       const int v = mesh.F(f, c);
       for (const int* g = topology.vertex_faces_begin(v); g != topology.vertex_faces_end(v); ++g)
@@ -49,13 +49,13 @@ void face_rings(const TriangleMesh& mesh, const MeshTopology& topology, std::vec
         }
     }
     offsets[f + 1] = static_cast<int>(ring.size());
-  }
+  });
 }
 
 
 // Bilateral filtering of the face normals (Zheng et al., eq. 4).
 MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& topology,
-                                const DenoisingOptions& options) {
+                                const DenoisingOptions& options, const ProgressSpan& progress) {
   const int nf = mesh.num_faces();
   FaceGeometry g = face_geometry(mesh.V, mesh.F);
 
@@ -63,12 +63,14 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
   // centroid distance; range = a multiple of their median normal difference, counting only pairs
   // that are not coplanar: on scans that is the noise, on CAD tessellations the facet folds of
   // curved faces (coplanar pairs inside flat faces say nothing about either).
+  // Preparing the kernels costs about as much as one filtering pass: it is polled as well.
   std::vector<int> offsets, ring;
-  face_rings(mesh, topology, offsets, ring);
+  face_rings(mesh, topology, offsets, ring, progress.sub(0.0, 0.07));
   std::vector<double> normal_jumps, distances(ring.size());
   normal_jumps.reserve(ring.size());
   double centroid_distance = 0.0;
-  for (int f = 0; f < nf; ++f)
+  const ProgressSpan measuring = progress.sub(0.07, 0.14);
+  for_each_polled(nf, measuring, [&](int f) {
     for (int k = offsets[f]; k < offsets[f + 1]; ++k) {
       distances[k] = (g.centroid.row(f) - g.centroid.row(ring[k])).norm();
       if (ring[k] == f) continue;
@@ -76,6 +78,7 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
       const double jump = (g.normal.row(f) - g.normal.row(ring[k])).norm();
       if (jump > kCoplanar) normal_jumps.push_back(jump);
     }
+  });
   if (normal_jumps.empty()) return g.normal;  // a flat mesh: nothing to filter
   centroid_distance /= static_cast<double>(ring.size() - nf);
   auto middle = normal_jumps.begin() + normal_jumps.size() / 2;
@@ -83,14 +86,20 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
   const double sigma_range = options.range_factor * *middle;
   if (!(sigma_range > 0.0) || !(centroid_distance > 0.0)) return g.normal;
 
+  progress.step(0.16);
   std::vector<double> spatial(ring.size());
-  for (size_t k = 0; k < ring.size(); ++k)
+  const ProgressSpan weighting = progress.sub(0.16, 0.2);
+  for_each_polled(static_cast<int>(ring.size()), weighting, [&](int k) {
     spatial[k] = g.area[ring[k]] * std::exp(-distances[k] * distances[k] / (2.0 * centroid_distance * centroid_distance));
+  }, 1 << 18);
 
   MatrixX3d normals = g.normal, next(nf, 3);
   const double range_scale = 1.0 / (2.0 * sigma_range * sigma_range);
   for (int it = 0; it < options.normal_iterations; ++it) {
-    for (int f = 0; f < nf; ++f) {
+    // A pass over a million faces takes over a second: poll inside it.
+    const ProgressSpan pass = progress.sub(0.2 + 0.8 * it / options.normal_iterations,
+                                           0.2 + 0.8 * (it + 1) / options.normal_iterations);
+    for_each_polled(nf, pass, [&](int f) {
       Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
       for (int k = offsets[f]; k < offsets[f + 1]; ++k) {
         const int h = ring[k];
@@ -99,7 +108,7 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
       }
       const double length = sum.norm();
       next.row(f) = length > 0.0 ? (sum / length).eval() : normals.row(f);
-    }
+    });
     normals.swap(next);
   }
 
@@ -108,9 +117,10 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
 
 // Moves each vertex so that its faces agree with the filtered normals (Zheng et al., eq. 7).
 MatrixX3d positions_fitting_normals(const TriangleMesh& mesh, const MeshTopology& topology,
-                                    const MatrixX3d& normals, int iterations) {
+                                    const MatrixX3d& normals, int iterations, const ProgressSpan& progress) {
   MatrixX3d V = mesh.V, delta(V.rows(), 3);
   for (int it = 0; it < iterations; ++it) {
+    progress.step(static_cast<double>(it) / iterations);
     delta.setZero();
     for (int f = 0; f < mesh.num_faces(); ++f) {
       const Eigen::RowVector3d centroid = (V.row(mesh.F(f, 0)) + V.row(mesh.F(f, 1)) + V.row(mesh.F(f, 2))) / 3.0;
@@ -130,9 +140,11 @@ MatrixX3d positions_fitting_normals(const TriangleMesh& mesh, const MeshTopology
 }  // namespace
 
 MatrixX3d denoised_positions(const TriangleMesh& mesh, const MeshTopology& topology,
-                             const DenoisingOptions& options) {
-  const MatrixX3d normals = filtered_face_normals(mesh, topology, options);
-  return positions_fitting_normals(mesh, topology, normals, options.vertex_iterations);
+                             const DenoisingOptions& options, const ProgressSpan& progress) {
+  const MatrixX3d normals = filtered_face_normals(mesh, topology, options, progress.sub(0.0, 0.6));
+  MatrixX3d V = positions_fitting_normals(mesh, topology, normals, options.vertex_iterations, progress.sub(0.6, 1.0));
+  progress.step(1.0);
+  return V;
 }
 
 }  // namespace idealize

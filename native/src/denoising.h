@@ -9,6 +9,7 @@
 #pragma once
 
 #include "mesh.h"
+#include "progress.h"
 
 namespace idealize {
 
@@ -23,7 +24,8 @@ struct DenoisingOptions {
 
 // A denoised copy of the positions (#V x 3, same connectivity). A mesh without any fold (all faces
 // coplanar with their neighbours) is returned unchanged.
+// Reports into `progress` and throws Cancelled when it is cancelled.
 MatrixX3d denoised_positions(const TriangleMesh& mesh, const MeshTopology& topology,
-                             const DenoisingOptions& options = {});
+                             const DenoisingOptions& options = {}, const ProgressSpan& progress = {});
 
 }  // namespace idealize

@@ -185,12 +185,14 @@ double misfit(const TriangleMesh& mesh, int f, const Feature& feature, double fl
 // opens its neighbours to the same test, so a whole strip moves in one call. Returns which patches
 // changed.
 std::vector<char> reassign_faces(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<Feature>& features,
-                                 const FeatureOptions& options, double floor, std::vector<int>& labels) {
+                                 const FeatureOptions& options, double floor, std::vector<int>& labels,
+                                 const ProgressSpan& progress) {
   const double normal_floor = options.normal_floor_degrees * M_PI / 180.0;
   std::vector<char> changed(features.size(), 0);
   std::vector<int> queue;
   for (int f = 0; f < mesh.num_faces(); ++f) queue.push_back(f);
   for (size_t head = 0; head < queue.size(); ++head) {
+    progress.poll(static_cast<long long>(head));
     const int f = queue[head];
     const int p = labels[f];
     if (p < 0) continue;
@@ -234,7 +236,7 @@ std::vector<char> reassign_faces(const TriangleMesh& mesh, const MeshTopology& t
 bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<PatchPoints>& points,
                    const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
                    const FeatureOptions& options, double tolerance, std::vector<Feature>& features,
-                   std::vector<int>& labels, std::set<std::pair<int, int>>& rejected) {
+                   std::vector<int>& labels, std::set<std::pair<int, int>>& rejected, const ProgressSpan& progress) {
   std::vector<std::pair<int, int>> pairs;
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int c = 0; c < 3; ++c) {
@@ -252,7 +254,9 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
   };
   std::vector<Candidate> candidates;
   const double normal_floor = options.normal_floor_degrees * M_PI / 180.0;
-  for (const auto& [a, b] : pairs) {
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    progress.step(static_cast<double>(i) / pairs.size());
+    const auto [a, b] = pairs[i];
     if (rejected.count({a, b})) continue;  // neither changed since
     const Feature &fa = features[a], &fb = features[b];
     const PatchPoints &pa = points[a], &pb = points[b];
@@ -316,7 +320,8 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
 // apart into planar facets that merging joins again. The first region keeps the patch's id, the
 // others get new ids from `next_id` on.
 int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Eigen::VectorXd& area, int patch,
-                double noise, double normal_noise, int min_region_faces, std::vector<int>& labels, int next_id) {
+                double noise, double normal_noise, int min_region_faces, std::vector<int>& labels, int next_id,
+                const ProgressSpan& progress) {
   std::vector<int> faces;
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (labels[f] == patch) faces.push_back(f);
@@ -332,6 +337,7 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
   for (int f : faces) open[f] = kUnvisited;
   const double cos_limit = std::cos(std::min(3.0 * normal_noise, 0.5 * M_PI));
   bool first = true;
+  long long visited = 0;  // faces taken from the queues: polled every few thousand
   for (int seed : faces) {
     if (open[seed] != kUnvisited) continue;
     Surface plane;
@@ -354,6 +360,7 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
     };
     accumulate(seed);
     for (size_t head = 0; head < queue.size(); ++head) {
+      progress.poll(++visited, 1 << 12);
       const int f = queue[head];
       for (int c = 0; c < 3; ++c) {
         const int g = topology.face_neighbor(f, c);
@@ -391,6 +398,7 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
     open[seed] = kRemainder;
     std::vector<std::pair<int, int>> borders;  // (region id, shared edges)
     for (size_t head = 0; head < component.size(); ++head) {
+      progress.poll(++visited, 1 << 12);
       const int f = component[head];
       for (int c = 0; c < 3; ++c) {
         const int g = topology.face_neighbor(f, c);
@@ -475,13 +483,16 @@ void compact_features(std::vector<int>& labels, std::vector<Feature>& features) 
 // one surface inside a patch, onto the intersection of two or three along edges and at corners
 // (alternating projections, which converge to the nearest common point of transversal surfaces).
 void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
-                      const std::vector<Feature>& features, double tolerance, FeatureLayer& layer) {
+                      const std::vector<Feature>& features, double tolerance, FeatureLayer& layer,
+                      const ProgressSpan& progress) {
   layer.idealized_vertices = mesh.V;
   double sum = 0.0;
   int measured = 0;
   layer.max_deviation = 0.0;
+  layer.vertex_deviation = Eigen::VectorXd::Constant(mesh.num_vertices(), std::numeric_limits<double>::quiet_NaN());
   std::vector<int> around;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
+    progress.tick(v, mesh.num_vertices());
     around.clear();
     for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f) {
       const int p = labels[*f];
@@ -493,6 +504,7 @@ void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, co
     const Eigen::Vector3d original = mesh.V.row(v);
     double nearest = std::numeric_limits<double>::infinity();
     for (int p : around) nearest = std::min(nearest, std::abs(signed_distance(features[p].surface, original)));
+    layer.vertex_deviation[v] = nearest;
     sum += nearest * nearest;
     ++measured;
     layer.max_deviation = std::max(layer.max_deviation, nearest);
@@ -530,6 +542,10 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     if (label >= num_patches) throw MeshError("a triangle label names a patch that does not exist");
 
   FeatureLayer layer;
+  // Shares of the whole run, as measured on a scan of a million triangles: refitting after each
+  // change of the patches dominates.
+  const ProgressSpan progress(options.progress, "fit");
+  progress.step(0.0);  // a cancelled Progress stops here, before any work
   auto start = std::chrono::steady_clock::now();
   auto stage = [&](const char* name) {
     const auto now = std::chrono::steady_clock::now();
@@ -548,13 +564,16 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   auto identify_points = [&](const PatchPoints& pp, const PatchCurvature& c) {
     return identify(pp, c, zero_mean_curvature, options, layer.distance_tolerance);
   };
-  auto identify_all = [&](const std::vector<PatchPoints>& points, const std::vector<char>& which) {
+  auto identify_all = [&](const std::vector<PatchPoints>& points, const std::vector<char>& which,
+                          const ProgressSpan& span) {
     layer.features.resize(points.size());
-    for (size_t p = 0; p < points.size(); ++p)
+    for (size_t p = 0; p < points.size(); ++p) {
+      span.step(static_cast<double>(p) / points.size());
       if (which[p]) layer.features[p] = identify_points(points[p], curvature[p]);
+    }
   };
   std::vector<PatchPoints> points = patch_points(mesh, layer.labels, num_patches);
-  identify_all(points, std::vector<char>(num_patches, 1));
+  identify_all(points, std::vector<char>(num_patches, 1), progress.sub(0.01, 0.06));
   stage("fit");
 
 
@@ -567,14 +586,21 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       if (l >= 0) ++count[l];
     return count;
   };
-  auto reassign = [&] {
+  // Rounds stop early when nothing moves: each round takes its share of the span.
+  auto reassign = [&](const ProgressSpan& span) {
     const int patches = static_cast<int>(layer.features.size());
     const std::vector<int> before = triangle_counts();
+    const double share = 0.9 / std::max(options.reassignment_rounds, 1);
     for (int round = 0; round < options.reassignment_rounds; ++round) {
-      const std::vector<char> changed = reassign_faces(mesh, topology, layer.features, options, floor, layer.labels);
+      const ProgressSpan this_round = span.sub(share * round, share * (round + 1));
+      this_round.step(0.0);
+      const std::vector<char> changed =
+          reassign_faces(mesh, topology, layer.features, options, floor, layer.labels, this_round);
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
+      this_round.step(0.4);
       points = patch_points(mesh, layer.labels, patches);
       for (int p = 0; p < patches; ++p) {
+        this_round.sub(0.5, 1.0).step(static_cast<double>(p) / patches);
         Feature& f = layer.features[p];
         if (!changed[p] || f.type == SurfaceType::Freeform) continue;
         const SurfaceFit fit = fit_surface(f.type, points[p], options.fit, &f.surface);
@@ -586,10 +612,12 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     const std::vector<int> after = triangle_counts();
     std::vector<char> reidentify(patches, 0);
     for (int p = 0; p < patches; ++p) reidentify[p] = std::abs(after[p] - before[p]) > before[p] / 4;
-    identify_all(points, reidentify);
+    identify_all(points, reidentify, span.sub(0.9, 1.0));
   };
-  reassign();
+  reassign(progress.sub("reassign", 0.06, 0.19));
   stage("reassign");
+  const ProgressSpan split = progress.sub("split", 0.19, 0.355);
+  split.step(0.0);
   // Split what no surface fits into planar regions (and, on noisy meshes, the connected rest);
   // merging below joins pieces again where one surface fits them together. On exact
   // tessellations (the typical patch fits to a hundredth of the tolerance, as the vertices of a CAD
@@ -613,10 +641,11 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       const double split_above = options.split_ratio * noise + layer.distance_tolerance;
       auto badly_fitting = [&](const Feature& f) { return f.type == SurfaceType::Freeform || f.rms > split_above; };
       for (int p = 0; p < num_patches; ++p) {
+        split.sub(0.0, 0.5).step(static_cast<double>(p) / num_patches);
         const Feature& f = layer.features[p];
         if (badly_fitting(f)) {
           next_id = split_patch(mesh, topology, area, p, noise, normal_noise, exact ? 1 : 2 * kInteriorPoints, layer.labels,
-                                next_id);
+                                next_id, split);
           was_split[p] = exact ? 1 : 2;
         }
       }
@@ -630,25 +659,36 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         curvature.resize(next_id);
         for (int f = 0; f < mesh.num_faces(); ++f)  // a split region keeps the curvature of its patch
           if (layer.labels[f] >= num_patches) curvature[layer.labels[f]] = patch_curvature[labels[f]];
+        split.step(0.5);
         points = patch_points(mesh, layer.labels, next_id);
-        identify_all(points, which);
+        identify_all(points, which, split.sub(0.6, 1.0));
       }
     }
   }
   stage("split");
-  reassign();
+  reassign(progress.sub("reassign", 0.355, 0.5));
   const int patches = static_cast<int>(layer.features.size());
   stage("reassign_after_split");
   std::set<std::pair<int, int>> rejected;
+  // Later passes refit fewer open pairs, and most runs stop early: each pass takes a third of
+  // what is left of the span.
+  const ProgressSpan merge = progress.sub("merge", 0.5, 0.87);
+  double merged_so_far = 0.0;
   for (int pass = 0; pass < options.merge_passes; ++pass) {
+    const double share = (1.0 - merged_so_far) / 3.0;
+    const ProgressSpan this_pass = merge.sub(merged_so_far, merged_so_far + share);
+    merged_so_far += share;
     if (!merge_patches(mesh, topology, points, identify_points, options, layer.distance_tolerance, layer.features,
-                       layer.labels, rejected))
+                       layer.labels, rejected, this_pass.sub(0.0, 0.9)))
       break;
+    this_pass.step(0.9);
     points = patch_points(mesh, layer.labels, patches);
   }
+  merge.step(1.0);
   stage("merge");
-  reassign();
+  reassign(progress.sub("reassign", 0.87, 0.975));
   stage("reassign_after_merge");
+  progress.sub("classify", 0.975, 0.98).step(0.0);
   undo_inexact_splits(mesh, area, labels, was_split, kExactFraction * layer.distance_tolerance, identify_points, curvature,
                       layer.features, layer.labels);
   compact_features(layer.labels, layer.features);
@@ -673,6 +713,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         f.spread > options.freeform_relative_size * std::sqrt(f.area))
       f.type = SurfaceType::Freeform;
   stage("classify");
+  progress.sub("relations", 0.98, 0.99).step(0.0);
 
   const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
   build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
@@ -700,8 +741,10 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     }
     stage("idealize");
   }
-  project_vertices(mesh, topology, layer.labels, layer.features, layer.distance_tolerance, layer);
+  const ProgressSpan projection = progress.sub("projection", 0.99, 1.0);
+  project_vertices(mesh, topology, layer.labels, layer.features, layer.distance_tolerance, layer, projection);
   stage("projection");
+  projection.step(1.0);
   return layer;
 }
 

@@ -13,6 +13,7 @@
 #pragma once
 
 #include "mesh.h"
+#include "progress.h"
 #include "surface.h"
 #include "surface_fitting.h"
 
@@ -61,6 +62,8 @@ struct FeatureOptions {
   // Make the relations exact and snap axes to the part's ideal directions (idealization.h) before
   // the mesh is projected.
   bool idealize = true;
+  // Receives the progress (0..1 over the call) and is polled for cancellation (throws Cancelled).
+  Progress* progress = nullptr;
 };
 
 // The curvature statistics of one patch that identification reads (area-weighted means).
@@ -109,6 +112,9 @@ struct FeatureLayer {
   std::vector<FeatureAdjacency> adjacency;  // sorted by (a, b)
   std::vector<FeatureRelation> relations;
   MatrixX3d idealized_vertices;  // the input vertices moved onto their features (same connectivity)
+  // Per input vertex: distance from the nearest surface of the analytic features around it; NaN
+  // where only freeform features (or none) touch it.
+  Eigen::VectorXd vertex_deviation;
   double max_deviation = 0.0;    // largest distance of an input vertex from its nearest feature surface
   double rms_deviation = 0.0;
   double distance_tolerance = 0.0;  // the one used

@@ -21,7 +21,7 @@ struct TripleHash {
 
 }  // namespace
 
-PreparedMesh prepare_mesh(const TriangleMesh& input) {
+PreparedMesh prepare_mesh(const TriangleMesh& input, const ProgressSpan& progress) {
   const int nv = input.num_vertices();
   const int nf = input.num_faces();
   if (nf == 0) throw MeshError("the mesh has no triangles");
@@ -43,6 +43,7 @@ PreparedMesh prepare_mesh(const TriangleMesh& input) {
   kept.reserve(nf);
   out.input_face.assign(nf, -1);
   for (int f = 0; f < nf; ++f) {
+    progress.tick(f, nf);
     const int a = input.F(f, 0), b = input.F(f, 1), c = input.F(f, 2);
     const Eigen::Vector3d pa = input.V.row(a), pb = input.V.row(b), pc = input.V.row(c);
     if (a == b || b == c || a == c || 0.5 * (pb - pa).cross(pc - pa).norm() <= zero_area) {
@@ -75,6 +76,7 @@ PreparedMesh prepare_mesh(const TriangleMesh& input) {
   for (size_t i = 0; i < kept.size(); ++i)
     for (int c = 0; c < 3; ++c) out.mesh.F(i, c) = new_index[input.F(kept[i], c)];
   out.face_origin = std::move(kept);
+  progress.step(1.0);
   return out;
 }
 

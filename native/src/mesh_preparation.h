@@ -6,6 +6,7 @@
 #pragma once
 
 #include "mesh.h"
+#include "progress.h"
 
 #include <vector>
 
@@ -20,7 +21,8 @@ struct PreparedMesh {
   int removed_unused_vertices = 0;
 };
 
-// Throws MeshError when nothing usable remains or coordinates are not finite.
-PreparedMesh prepare_mesh(const TriangleMesh& input);
+// Throws MeshError when nothing usable remains or coordinates are not finite; Cancelled when
+// `progress` is cancelled.
+PreparedMesh prepare_mesh(const TriangleMesh& input, const ProgressSpan& progress = {});
 
 }  // namespace idealize

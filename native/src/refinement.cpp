@@ -53,8 +53,8 @@ class Refiner {
   }
 
   // Splits, longest first, every edge longer than max_length (at most until `max_faces` faces).
-  void split_long_edges(double max_length, size_t max_faces) {
-    mark_stuck_faces(max_length);
+  void split_long_edges(double max_length, size_t max_faces, const ProgressSpan& progress) {
+    mark_stuck_faces(max_length, progress);
     struct Entry {
       double squared;
       int face, a, b;  // the directed edge a→b of face
@@ -77,7 +77,9 @@ class Refiner {
       }
     };
     for (int f = 0; f < static_cast<int>(faces_.size()); ++f) push(f);
-    while (!queue.empty() && faces_.size() < max_faces) {
+    // How many splits remain is not known in advance: only polled for cancellation.
+    for (long long popped = 0; !queue.empty() && faces_.size() < max_faces; ++popped) {
+      progress.poll(popped);
       const Entry top = queue.top();
       queue.pop();
       const int c = corner_of_edge(top.face, top.a, top.b);
@@ -88,11 +90,12 @@ class Refiner {
   }
 
   // Delaunay flips between faces of the same input triangle (coplanar by construction).
-  void flip_to_delaunay() {
+  void flip_to_delaunay(const ProgressSpan& progress) {
     for (int pass = 0; pass < 100; ++pass) {
       bool flipped = false;
       for (int f = 0; f < static_cast<int>(faces_.size()); ++f)
         for (int c = 0; c < 3; ++c) {
+          if (c == 0) progress.poll(f);
           const int g = neighbors_[f][c];
           if (g <= f || origin_[g] != origin_[f]) continue;
           if (should_flip(f, c)) {
@@ -121,11 +124,12 @@ class Refiner {
   // A face with a long edge that may not be split can never get short edges (the other two add up
   // to at least its length), and neither can the faces across its long edges: such faces are left
   // as they are. Computed once; faces made by splitting are never stuck.
-  void mark_stuck_faces(double max_length) {
+  void mark_stuck_faces(double max_length, const ProgressSpan& progress) {
     stuck_.assign(faces_.size(), 0);
     for (bool changed = true; changed;) {
       changed = false;
       for (size_t f = 0; f < faces_.size(); ++f) {
+        progress.poll(static_cast<long long>(f));
         if (stuck_[f]) continue;
         for (int c = 0; c < 3 && !stuck_[f]; ++c) {
           const int g = neighbors_[f][c];
@@ -244,7 +248,7 @@ class Refiner {
 }  // namespace
 
 RefinedMesh refine_long_triangles(const TriangleMesh& mesh, const MeshTopology& topology,
-                                  const RefinementOptions& options) {
+                                  const RefinementOptions& options, const ProgressSpan& progress) {
   const double area = face_areas(mesh).sum();
   constexpr double kEquilateralArea = 0.43301270189221935;  // area of a unit equilateral triangle
   double target = options.target_edge_length;
@@ -257,11 +261,15 @@ RefinedMesh refine_long_triangles(const TriangleMesh& mesh, const MeshTopology& 
 
   Refiner refiner(mesh, topology);
   if (target > 0.0) {
-    refiner.split_long_edges(4.0 / 3.0 * target, static_cast<size_t>(options.max_triangles));  // Botsch & Kobbelt's threshold
-    refiner.flip_to_delaunay();
+    refiner.split_long_edges(4.0 / 3.0 * target, static_cast<size_t>(options.max_triangles),  // Botsch & Kobbelt's threshold
+                             progress.sub(0.1, 0.6));
+    progress.step(0.6);
+    refiner.flip_to_delaunay(progress.sub(0.6, 0.9));
   }
+  progress.step(0.9);
   RefinedMesh out = refiner.result();
   out.target_edge_length = target;
+  progress.step(1.0);
   return out;
 }
 

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "mesh.h"
+#include "progress.h"
 
 #include <vector>
 
@@ -29,7 +30,8 @@ struct RefinedMesh {
 
 // Refines `mesh` (vertices of the input keep their indices). Edges shared by more than two faces or
 // by two faces of opposite orientation are never split, so the refined mesh stays conforming.
+// Reports into `progress` and throws Cancelled when it is cancelled.
 RefinedMesh refine_long_triangles(const TriangleMesh& mesh, const MeshTopology& topology,
-                                  const RefinementOptions& options = {});
+                                  const RefinementOptions& options = {}, const ProgressSpan& progress = {});
 
 }  // namespace idealize

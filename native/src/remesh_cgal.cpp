@@ -224,7 +224,8 @@ TriangleMesh remesh_isotropic(const TriangleMesh& mesh, double target_edge_lengt
   return from_surface_mesh(sm);
 }
 
-std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points, std::vector<double>* distances) {
+std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points, std::vector<double>* distances,
+                               const ProgressSpan& progress) {
   check_indexed_mesh(mesh, "closest faces");
   for (Eigen::Index i = 0; i < points.rows(); ++i)
     for (int c = 0; c < 3; ++c)
@@ -244,7 +245,9 @@ std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points
   face_row.reserve(static_cast<std::size_t>(nf));
   sm.reserve(static_cast<SurfaceMesh::size_type>(3 * nf), static_cast<SurfaceMesh::size_type>(3 * nf),
              static_cast<SurfaceMesh::size_type>(nf));
+  const ProgressSpan indexing = progress.sub(0.0, 0.1);
   for (Eigen::Index f = 0; f < nf; ++f) {
+    indexing.tick(f, nf);
     std::array<Point, 3> p;
     for (int c = 0; c < 3; ++c) {
       const int v = mesh.F(f, c);
@@ -264,15 +267,19 @@ std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points
   using Tree = CGAL::AABB_tree<Traits>;
   Tree tree(faces(sm).first, faces(sm).second, sm);
   tree.accelerate_distance_queries();
+  progress.step(0.2);
 
   std::vector<int> result(static_cast<std::size_t>(points.rows()));
   if (distances) distances->resize(result.size());
+  const ProgressSpan queries = progress.sub(0.2, 1.0);
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    queries.tick(i, points.rows(), 1 << 12);
     const Point q(points(i, 0), points(i, 1), points(i, 2));
     const auto hit = tree.closest_point_and_primitive(q);
     result[static_cast<std::size_t>(i)] = face_row[static_cast<std::size_t>(hit.second)];
     if (distances) (*distances)[static_cast<std::size_t>(i)] = std::sqrt(CGAL::squared_distance(q, hit.first));
   }
+  progress.step(1.0);
   return result;
 }
 

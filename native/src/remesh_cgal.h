@@ -6,6 +6,7 @@
 #pragma once
 
 #include "mesh.h"
+#include "progress.h"
 
 #include <vector>
 
@@ -18,8 +19,9 @@ namespace idealize {
 TriangleMesh remesh_isotropic(const TriangleMesh& mesh, double target_edge_length, int iterations);
 
 // Index of the face of `mesh` closest to each row of `points` (#P x 3), via an AABB tree; with
-// `distances`, also the distance of each point from the mesh.
+// `distances`, also the distance of each point from the mesh. Reports into `progress` and throws
+// Cancelled when it is cancelled.
 std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points,
-                               std::vector<double>* distances = nullptr);
+                               std::vector<double>* distances = nullptr, const ProgressSpan& progress = {});
 
 }  // namespace idealize

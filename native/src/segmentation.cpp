@@ -37,9 +37,10 @@ constexpr int kSmoothBase = 2;
 // Area-weighted one-ring means of `values`, only among vertices where `active` is set.
 Eigen::VectorXd smooth_values(const Eigen::VectorXd& values, const Eigen::VectorXd& area,
                               const std::vector<char>& active, const MeshTopology& topology,
-                              int iterations) {
+                              int iterations, const ProgressSpan& progress) {
   Eigen::VectorXd current = values, next = values;
   for (int it = 0; it < iterations; ++it) {
+    progress.step(static_cast<double>(it) / iterations);
     for (int v = 0; v < current.size(); ++v) {
       if (!active[v]) continue;
       double weight = area[v], sum = area[v] * current[v];
@@ -100,7 +101,7 @@ void dissolve_slivers(const TriangleMesh& mesh, const MeshTopology& topology, st
 // of part 2): every transition triangle joins an edge-adjacent patch, most similar first, so that
 // patches meet along edge polylines.
 void grow_patches(const TriangleMesh& mesh, const MeshTopology& topology, const Eigen::VectorXd& curvature,
-                  int num_patches, bool fold, std::vector<int>& label) {
+                  int num_patches, bool fold, std::vector<int>& label, const ProgressSpan& progress) {
   constexpr int kNone = -1, kSeveral = -2;
   auto face_curvature = [&](int f) {
     return (curvature[mesh.F(f, 0)] + curvature[mesh.F(f, 1)] + curvature[mesh.F(f, 2)]) / 3.0;
@@ -157,7 +158,8 @@ void grow_patches(const TriangleMesh& mesh, const MeshTopology& topology, const 
   };
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (label[f] == kTransition) push(f);
-  while (!queue.empty()) {
+  for (long long popped = 0; !queue.empty(); ++popped) {
+    progress.poll(popped);
     const int f = queue.top().second;
     queue.pop();
     if (label[f] != kTransition) continue;
@@ -218,30 +220,36 @@ int compact_patches(std::vector<int>& labels, std::vector<int>& working_labels, 
 Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& options) {
   Segmentation out;
   StageTimer timer(out.timings);
+  // Shares of the whole run, as measured on a scan of a million triangles: denoising dominates.
+  const ProgressSpan progress(options.progress, "prepare");
+  progress.step(0.0);  // a cancelled Progress stops here, before any work
 
-  const PreparedMesh prepared = prepare_mesh(input);
+  const PreparedMesh prepared = prepare_mesh(input, progress.sub(0.0, 0.04));
   out.removed_degenerate = prepared.removed_degenerate;
   out.removed_duplicate = prepared.removed_duplicate;
   {
     const MeshTopology topology(prepared.mesh);
+    progress.step(0.055);
     std::vector<int> shell;
     out.shells = face_components(topology, std::vector<int>(prepared.mesh.num_faces(), 0), shell);
+    progress.step(0.07);
     out.boundary_edges = topology.num_boundary_edges();
     out.nonmanifold_edges = topology.num_nonmanifold_edges();
     timer.stage("prepare");
-    out.working = refine_long_triangles(prepared.mesh, topology, options.refinement);
+    out.working = refine_long_triangles(prepared.mesh, topology, options.refinement, progress.sub("refine", 0.07, 0.16));
     for (int& origin : out.working.face_origin) origin = prepared.face_origin[origin];
   }
   const TriangleMesh& mesh = out.working.mesh;
   const MeshTopology topology(mesh);
   const int nv = mesh.num_vertices();
   timer.stage("refine");
+  progress.sub("refine", 0.16, 0.18).step(1.0);
 
   {
     TriangleMesh denoised;
-    denoised.V = denoised_positions(mesh, topology, options.denoising);
+    denoised.V = denoised_positions(mesh, topology, options.denoising, progress.sub("denoise", 0.18, 0.88));
     denoised.F = mesh.F;
-    VertexCurvature curvature = vertex_curvature(denoised, topology);
+    VertexCurvature curvature = vertex_curvature(denoised, topology, progress.sub("curvature", 0.88, 0.93));
     out.mean_curvature = std::move(curvature.mean);
     out.gaussian_curvature = std::move(curvature.gaussian);
     out.vertex_area = std::move(curvature.area);
@@ -263,13 +271,15 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
     else non_sharp[v] = 1;
   }
   timer.stage("pass1");
+  const ProgressSpan histograms = progress.sub("histograms", 0.93, 0.965);
+  histograms.step(0.0);
 
   // Pass 2: the curvature values inside the non-sharp patches (their rims excluded, which carry
   // the flanks of chamfered edges) are smoothed, the histogram is rebuilt, and every remaining
   // valley splits it.
   const std::vector<char> smooth_region = region_interior(mesh.F, non_sharp);
   out.smoothed_mean = smooth_values(H, out.vertex_area, smooth_region, topology,
-                                    options.curvature_smoothing_iterations);
+                                    options.curvature_smoothing_iterations, histograms.sub(0.0, 0.8));
   std::vector<double> hs(out.smoothed_mean.data(), out.smoothed_mean.data() + nv);
   out.histogram = histogram_ranges(hs, smooth_region, options.histogram);
   for (int v = 0; v < nv; ++v)
@@ -290,12 +300,17 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
   const int num_classified = face_components(topology, face_class, out.working_labels);
   timer.stage("pass2");
 
+  const ProgressSpan thinning = progress.sub("thinning", 0.965, 0.985);
+  thinning.step(0.0);
   dissolve_slivers(mesh, topology, out.working_labels, num_classified);
-  grow_patches(mesh, topology, out.smoothed_mean, num_classified, false, out.working_labels);
+  grow_patches(mesh, topology, out.smoothed_mean, num_classified, false, out.working_labels, thinning.sub(0.0, 0.5));
   std::vector<char> working_transition(mesh.num_faces());
   for (int f = 0; f < mesh.num_faces(); ++f) working_transition[f] = out.working_labels[f] == kTransition;
-  grow_patches(mesh, topology, out.smoothed_mean, num_classified, true, out.working_labels);
+  thinning.step(0.5);
+  grow_patches(mesh, topology, out.smoothed_mean, num_classified, true, out.working_labels, thinning.sub(0.5, 1.0));
   timer.stage("thinning");
+  const ProgressSpan map_back = progress.sub("map_back", 0.985, 1.0);
+  map_back.step(0.0);
 
   // Map back: each input face takes the patch covering most of its area; duplicates repeat the
   // label of the face they duplicate.
@@ -372,6 +387,7 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
       out.patches[p].mean_gaussian /= curvature_area[p];
     }
   timer.stage("map_back");
+  map_back.step(1.0);
   return out;
 }
 

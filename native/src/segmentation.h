@@ -19,6 +19,7 @@
 #include "denoising.h"
 #include "histogram.h"
 #include "mesh.h"
+#include "progress.h"
 #include "refinement.h"
 
 #include <string>
@@ -39,6 +40,8 @@ struct SegmentationOptions {
   // Pass 1 calls a vertex sharp when its curvature radius is below this many local edge lengths:
   // fewer than about three edges per quarter circle cannot tell a round from a sharp edge.
   double sharp_radius_in_edges = 2.0;
+  // Receives the progress (0..1 over the call) and is polled for cancellation (throws Cancelled).
+  Progress* progress = nullptr;
 };
 
 // What one patch is, in terms the later stages and the report use.

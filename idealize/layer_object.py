@@ -1,0 +1,284 @@
+"""The feature layer as a FreeCAD document object, without any GUI (Draft's "objects" layer).
+
+A ``Mesh::FeaturePython`` linked to its source mesh (which stays untouched). Its Mesh is the
+idealized mesh (the source's triangles, vertices moved onto their features); everything the layer
+knows lives in properties, so undo, redo, save and reopen keep it: Labels (feature per triangle),
+FeatureTable (JSON: features, adjacency, relations, deviation, tolerance), VertexDeviation and the
+per-facet FaceColors the view shows. It recomputes when the source mesh or its options change;
+a recompute with nothing changed costs one fingerprint of the source.
+
+Console use (also in freecadcmd)::
+
+    import idealize
+    layer = idealize.make_feature_layer(App.ActiveDocument.Mesh)
+    solid = idealize.make_solid(layer)
+"""
+import hashlib
+import json
+
+import numpy as np
+
+from .features import FeatureLayer, idealize
+from .freecad_mesh import FACE_COLORS, deviation_colors, mesh_from_freecad, patch_colors, type_colors, usable_mesh
+from .mesh import MeshError
+
+PARAMETER_PATH = "User parameter:BaseApp/Preferences/Mod/Idealize"
+COLOR_MODES = ["Type", "Feature", "Deviation"]
+# Options of the layer: (property, type, preference key, default, description). Defaults are the
+# native core's (feature_layer.h); the preferences page writes the preference keys.
+OPTIONS = [
+    ("AngleTolerance", "App::PropertyAngle", "AngleTolerance", 5.0,
+     "Directions closer than this are parallel or perpendicular; axes within it of the part's ideal "
+     "directions (0/10/30/45/60 deg) snap to them"),
+    ("DistanceTolerance", "App::PropertyDistance", "DistanceTolerance", 0.0,
+     "Axes, centres, radii and offsets closer than this are equal; 0: 0.1 % of the bounding-box diagonal"),
+    ("RadiusTolerance", "App::PropertyPercent", "RadiusTolerancePercent", 5,
+     "Radii within this percentage of each other are one design radius"),
+    ("IdealizeRelations", "App::PropertyBool", "IdealizeRelations", True,
+     "Make parallel, coaxial, equal-radius ... relations exact and snap axes to ideal directions"),
+]
+# Property attribute flags (App::PropertyType): Output properties do not touch the object, so
+# results and colours can be set without triggering a recompute.
+_READ_ONLY, _OUTPUT = 1, 8
+
+
+def preferences():
+    """The option defaults from FreeCAD's parameters (the preferences page), as {property: value}."""
+    import FreeCAD
+    params = FreeCAD.ParamGet(PARAMETER_PATH)
+    values = {}
+    for name, kind, key, default, _ in OPTIONS:
+        if kind == "App::PropertyBool":
+            values[name] = params.GetBool(key, default)
+        elif kind == "App::PropertyPercent":
+            values[name] = params.GetInt(key, default)
+        else:
+            values[name] = params.GetFloat(key, default)
+    return values
+
+
+def layer_options(values):
+    """The keyword arguments of :func:`idealize.idealize` from option values ({property: value},
+    as :func:`preferences` gives them)."""
+    distance = float(values["DistanceTolerance"])
+    return {"angle_tolerance": float(values["AngleTolerance"]),
+            "distance_tolerance": distance if distance > 0 else None,
+            "radius_tolerance": values["RadiusTolerance"] / 100.0,
+            "idealize_relations": bool(values["IdealizeRelations"])}
+
+
+def object_options(obj):
+    """:func:`layer_options` of a layer object's option properties."""
+    return layer_options({name: getattr(obj, name) for name, *_ in OPTIONS})
+
+
+def fingerprint(mesh, options):
+    """Identifies the input of a layer: the source's vertices and triangles and the options."""
+    digest = hashlib.sha1(np.ascontiguousarray(mesh.vertices).tobytes())
+    digest.update(np.ascontiguousarray(mesh.faces).tobytes())
+    digest.update(json.dumps(options, sort_keys=True).encode())
+    return digest.hexdigest()
+
+
+def source_mesh(obj):
+    """The :class:`idealize.Mesh` of the layer's source (global coordinates)."""
+    if obj.Source is None:
+        raise MeshError("the feature layer %s has no source mesh" % obj.Label)
+    return usable_mesh(obj.Source)
+
+
+def freecad_mesh(vertices, faces):
+    """A Mesh.Mesh with exactly these vertices and triangles, in this order (no welding, no
+    dropped facets), so that facet i is triangle i."""
+    import FreeCAD
+    import Mesh
+    kernel = Mesh.Mesh()
+    kernel.addFacets((list(map(FreeCAD.Vector, np.asarray(vertices, dtype=np.float64).tolist())),
+                      list(map(tuple, np.asarray(faces).tolist()))))
+    return kernel
+
+
+def _jsonable(value):
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def facet_colors(obj, mode=None, highlight=None):
+    """(M, 3) RGB of the layer's facets in colour mode `mode` (COLOR_MODES; default the view's),
+    with every feature but `highlight` (a feature id) dimmed when given."""
+    table = json.loads(obj.FeatureTable)
+    labels = np.asarray(obj.Labels, dtype=np.int64)
+    if mode == "Feature":
+        colors = patch_colors(labels)
+    elif mode == "Deviation":
+        faces = np.asarray(obj.Mesh.Topology[1], dtype=np.int64)
+        deviation = np.asarray(obj.VertexDeviation, dtype=np.float64)
+        # A facet shows its worst vertex (NaN, grey, only where no vertex has an analytic surface).
+        per_facet = deviation[faces]
+        worst = np.where(np.isnan(per_facet), -np.inf, per_facet).max(axis=1)
+        colors = deviation_colors(np.where(np.isfinite(worst), worst, np.nan), deviation_scale(obj))
+    else:
+        colors = type_colors(table["features"], labels)
+    if highlight is not None:
+        others = labels != highlight
+        colors[others] = 0.35 * colors[others] + 0.65 * 0.85
+    return colors
+
+
+def deviation_scale(obj):
+    """Top of the deviation colour scale: the 99.5th percentile of the vertex deviations (a few
+    outliers would otherwise paint everything else blue), at least the distance tolerance / 100."""
+    deviation = np.asarray(obj.VertexDeviation, dtype=np.float64)
+    deviation = deviation[np.isfinite(deviation)]
+    floor = 0.01 * json.loads(obj.FeatureTable)["distance_tolerance"]
+    return max(float(np.percentile(deviation, 99.5)) if len(deviation) else 0.0, floor)
+
+
+def set_colors(obj, mode, highlight=None):
+    """Paint the layer's facets (the FaceColors property the mesh view shows)."""
+    setattr(obj, FACE_COLORS, [tuple(c) for c in facet_colors(obj, mode, highlight).tolist()])
+
+
+class _SourceWatcher:
+    """Touches the feature layers of a mesh whose Mesh or Placement changed. A Mesh::Feature's
+    Mesh is an output property: FreeCAD itself would not recompute the objects that use it."""
+
+    def slotChangedObject(self, obj, prop):
+        if prop not in ("Mesh", "Placement") or obj.Document.Restoring:
+            return
+        for user in obj.InList:
+            if is_feature_layer(user) and user.Source == obj:
+                user.touch()
+
+
+_watcher = None
+
+
+def _watch_sources():
+    global _watcher
+    if _watcher is None:
+        import FreeCAD
+        _watcher = _SourceWatcher()
+        FreeCAD.addDocumentObserver(_watcher)
+
+
+class FeatureLayerObject:
+    """Proxy of the feature layer document object."""
+
+    def __init__(self, obj, source):
+        obj.Proxy = self
+        obj.addProperty("App::PropertyLink", "Source", "Idealize", "The mesh the layer was made from (never modified)")
+        obj.Source = source
+        defaults = preferences()
+        for name, kind, _, _, description in OPTIONS:
+            obj.addProperty(kind, name, "Options", description)
+            setattr(obj, name, defaults[name])
+        results = [("App::PropertyIntegerList", "Labels", "The feature of every triangle of the source, in its order"),
+                   ("App::PropertyString", "FeatureTable",
+                    "JSON: features (type, params, rms ...), adjacency, relations, deviation, tolerance"),
+                   ("App::PropertyFloatList", "VertexDeviation",
+                    "Distance of every source vertex from the surfaces of its features"),
+                   ("App::PropertyInteger", "Features", "Number of features"),
+                   ("App::PropertyDistance", "MaxDeviation", "Largest distance of a source vertex from its features"),
+                   ("App::PropertyDistance", "RmsDeviation", "RMS distance of the source vertices from their features"),
+                   ("App::PropertyString", "SourceFingerprint", "Identifies the source mesh and options the layer was made from"),
+                   ("App::PropertyColorList", FACE_COLORS, "Colour of every facet (see the view's ColorBy)")]
+        for kind, name, description in results:
+            obj.addProperty(kind, name, "Layer", description, _READ_ONLY | _OUTPUT)
+        obj.setEditorMode("SourceFingerprint", 2)  # hidden: bookkeeping only
+        obj.setEditorMode("Labels", 2)  # hidden: a long list the property editor would choke on
+        obj.setEditorMode("VertexDeviation", 2)
+        obj.setEditorMode("FeatureTable", 2)
+        obj.setEditorMode(FACE_COLORS, 2)
+        self.Type = "IdealizeFeatureLayer"
+        _watch_sources()
+
+    def execute(self, obj):
+        mesh = source_mesh(obj)
+        options = object_options(obj)
+        if obj.SourceFingerprint != fingerprint(mesh, options):
+            apply_layer(obj, idealize(mesh, **options), options)
+
+    def onDocumentRestored(self, obj):
+        self.Type = "IdealizeFeatureLayer"
+        _watch_sources()
+
+    def dumps(self):
+        return None  # all state is in properties
+
+    def loads(self, state):
+        return None
+
+
+def color_mode(obj):
+    """The view's colour mode, "Type" without a GUI."""
+    view = getattr(obj, "ViewObject", None)
+    return getattr(view, "ColorBy", "Type") if view is not None else "Type"
+
+
+def apply_layer(obj, layer, options):
+    """Store a computed :class:`idealize.FeatureLayer` in the object: idealized mesh, labels,
+    table, deviation and colours."""
+    obj.Mesh = freecad_mesh(layer.idealized_vertices, layer.mesh.faces)
+    obj.Labels = np.asarray(layer.labels, dtype=np.int64).tolist()
+    obj.FeatureTable = json.dumps(_jsonable({
+        "features": layer.features, "adjacency": layer.adjacency, "relations": layer.relations,
+        "deviation": layer.deviation, "distance_tolerance": layer.distance_tolerance}))
+    obj.VertexDeviation = np.asarray(layer.vertex_deviation, dtype=np.float64).tolist()
+    obj.Features = len(layer.features)
+    obj.MaxDeviation = float(layer.deviation["max"])
+    obj.RmsDeviation = float(layer.deviation["rms"])
+    obj.SourceFingerprint = fingerprint(layer.mesh, options)
+    set_colors(obj, color_mode(obj))
+
+
+def is_feature_layer(obj):
+    proxy = getattr(obj, "Proxy", None)
+    return getattr(proxy, "Type", None) == "IdealizeFeatureLayer"
+
+
+def feature_layer(obj):
+    """The :class:`idealize.FeatureLayer` a layer object holds (source mesh + stored results)."""
+    if not is_feature_layer(obj):
+        raise TypeError("%s is not an Idealize feature layer" % getattr(obj, "Label", obj))
+    table = json.loads(obj.FeatureTable)
+    mesh = source_mesh(obj)
+    labels = np.asarray(obj.Labels, dtype=np.int32)
+    if len(labels) != mesh.n_triangles:
+        raise MeshError("the feature layer %s is out of date: its source mesh changed; recompute it" % obj.Label)
+    idealized = mesh_from_freecad(obj.Mesh).vertices
+    return FeatureLayer(mesh, None, {
+        "labels": labels, "features": table["features"], "adjacency": table["adjacency"],
+        "relations": table["relations"], "idealized_vertices": idealized,
+        "vertex_deviation": np.asarray(obj.VertexDeviation, dtype=np.float64),
+        "max_deviation": table["deviation"]["max"], "rms_deviation": table["deviation"]["rms"],
+        "distance_tolerance": table["distance_tolerance"], "timings": []})
+
+
+def make_feature_layer(source, layer=None, doc=None):
+    """Add a feature layer object "<Label>_Layer" for a Mesh::Feature `source` to its document
+    (or `doc`). With a precomputed `layer` (:class:`idealize.FeatureLayer` of this source with
+    the object's options), it is stored as is; otherwise the layer is computed. Returns the object.
+
+    The source is not modified. Callers in the GUI wrap this in a transaction.
+    """
+    import FreeCAD
+    if not hasattr(source, "isDerivedFrom") or not source.isDerivedFrom("Mesh::Feature"):
+        raise TypeError("make_feature_layer() takes a mesh object (Mesh::Feature), got %s"
+                        % getattr(source, "TypeId", type(source).__name__))
+    doc = doc or source.Document
+    obj = doc.addObject("Mesh::FeaturePython", source.Name + "_Layer")
+    obj.Label = source.Label + "_Layer"
+    FeatureLayerObject(obj, source)
+    if FreeCAD.GuiUp:
+        from .gui.view_layer import ViewProviderFeatureLayer
+        ViewProviderFeatureLayer(obj.ViewObject)
+    options = object_options(obj)
+    apply_layer(obj, layer if layer is not None else idealize(source_mesh(obj), **options), options)
+    obj.purgeTouched()  # up to date: nothing for a recompute to do
+    return obj

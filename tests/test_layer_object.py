@@ -1,0 +1,130 @@
+"""The feature layer document object without the GUI (FreeCAD imported into plain Python, as in
+freecadcmd): made from a mesh, holds what the layer knows, recomputes when the source changes and
+only then, survives save and reopen, feeds make_solid; bad input is refused with a clear error."""
+import json
+
+import numpy as np
+import pytest
+
+import shapes
+
+needs_freecad = pytest.mark.skipif(shapes.freecad() is None, reason="FreeCAD is not installed")
+
+
+@pytest.fixture()
+def document():
+    FreeCAD, _, _ = shapes.freecad()
+    doc = FreeCAD.newDocument("IdealizeLayerTest")
+    name = doc.Name
+    yield FreeCAD, doc
+    for open_name in list(FreeCAD.listDocuments()):
+        if open_name.startswith(name):
+            FreeCAD.closeDocument(open_name)
+
+
+def bracket_object(doc):
+    from idealize.layer_object import freecad_mesh
+    V, F, _ = shapes.tessellate_with_faces(shapes.bracket_solid(), 0.05)
+    source = doc.addObject("Mesh::Feature", "Bracket")
+    source.Mesh = freecad_mesh(V, F)
+    doc.recompute()
+    return source, V, F
+
+
+@needs_freecad
+def test_layer_object_holds_the_layer(document, tmp_path):
+    FreeCAD, doc = document
+    import idealize
+    source, V, F = bracket_object(doc)
+    before = source.Mesh.copy()
+    layer = idealize.make_feature_layer(source)
+    doc.recompute()
+
+    direct = idealize.idealize(idealize.freecad_mesh.mesh_from_freecad(source))  # single precision, as stored
+    assert layer.TypeId == "Mesh::FeaturePython" and layer.Label == "Bracket_Layer" and layer.Source == source
+    assert list(layer.Labels) == direct.labels.tolist()
+    table = json.loads(layer.FeatureTable)
+    assert [f["type"] for f in table["features"]] == [f["type"] for f in direct.features]
+    assert layer.Features == len(direct.features) == 11
+    assert len(table["relations"]) == len(direct.relations) and table["adjacency"]
+    assert layer.Mesh.CountFacets == len(F) and layer.Mesh.CountPoints == len(V)
+    idealized = idealize.freecad_mesh.mesh_from_freecad(layer.Mesh).vertices
+    assert np.allclose(idealized, direct.idealized_vertices, atol=1e-5)  # single precision of Mesh
+    assert len(layer.VertexDeviation) == len(V)
+    assert float(layer.MaxDeviation) == pytest.approx(direct.deviation["max"])
+    assert len(layer.FaceColors) == len(F)
+    assert "Touched" not in layer.State  # stored as computed: the recompute had nothing to do
+    assert source.Mesh.Topology == before.Topology  # the source is untouched
+
+    # The console API: make_solid takes the document object.
+    solid = idealize.make_solid(layer)
+    assert solid.solid and solid.faces == 11
+
+    # Save and reopen: the same layer, no recompute.
+    path = str(tmp_path / "layer.FCStd")
+    name, labels, table = layer.Name, list(layer.Labels), layer.FeatureTable
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    reopened = FreeCAD.openDocument(path)
+    again = reopened.getObject(name)
+    assert again.Proxy.Type == "IdealizeFeatureLayer"
+    assert list(again.Labels) == labels and again.FeatureTable == table
+    assert "Touched" not in again.State
+    assert idealize.feature_layer(again).labels.tolist() == direct.labels.tolist()
+
+
+@needs_freecad
+def test_layer_recomputes_when_source_or_options_change(document):
+    FreeCAD, doc = document
+    import idealize
+    source, V, F = bracket_object(doc)
+    layer = idealize.make_feature_layer(source)
+    doc.recompute()
+    fingerprint = layer.SourceFingerprint
+
+    moved = source.Mesh.copy()
+    moved.translate(100, 0, 0)
+    source.Mesh = moved
+    doc.recompute()
+    assert layer.SourceFingerprint != fingerprint
+    assert layer.Mesh.BoundBox.XMin == pytest.approx(source.Mesh.BoundBox.XMin, abs=1e-4)
+
+    # Without idealization the fitted surfaces stay: the layer changes with the option.
+    idealized = json.loads(layer.FeatureTable)["features"]
+    layer.IdealizeRelations = False
+    doc.recompute()
+    fitted = json.loads(layer.FeatureTable)["features"]
+    assert [f["type"] for f in fitted] == [f["type"] for f in idealized]
+    assert any(f["params"] != g["params"] for f, g in zip(fitted, idealized))
+
+    # A recompute with nothing changed keeps the stored layer (no recomputation).
+    stamp = layer.SourceFingerprint
+    layer.touch()
+    doc.recompute()
+    assert layer.SourceFingerprint == stamp
+
+
+@needs_freecad
+def test_layer_refuses_bad_input(document):
+    FreeCAD, doc = document
+    import idealize
+    empty = doc.addObject("Mesh::Feature", "Empty")
+    doc.recompute()
+    with pytest.raises(idealize.MeshError, match="no triangles"):
+        idealize.make_feature_layer(empty)
+    box = doc.addObject("Part::Box", "Box")
+    with pytest.raises(TypeError, match="mesh object"):
+        idealize.make_feature_layer(box)
+    with pytest.raises(TypeError, match="feature layer"):
+        idealize.make_solid(box)
+    with pytest.raises(ValueError, match="angle tolerance"):
+        idealize.idealize(idealize.Mesh(*shapes.icosphere()), angle_tolerance=0)
+
+
+def test_deviation_colors_scale_and_missing_values():
+    from idealize.freecad_mesh import DEVIATION_STOPS, SURFACE_COLORS, deviation_colors
+    colors = deviation_colors([0.0, 0.5, 1.0, 7.0, float("nan")], 1.0)
+    assert np.allclose(colors[0], DEVIATION_STOPS[0]) and np.allclose(colors[2], DEVIATION_STOPS[-1])
+    assert np.allclose(colors[3], DEVIATION_STOPS[-1])  # clamped above the scale
+    assert np.allclose(colors[1], DEVIATION_STOPS[len(DEVIATION_STOPS) // 2])
+    assert np.allclose(colors[4], SURFACE_COLORS["freeform"])
