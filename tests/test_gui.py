@@ -12,6 +12,8 @@ import subprocess
 import pytest
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# A remeshed CAD part from the project's shared test data (never copied into the repository).
+SHARED_MESH = os.path.join(os.path.dirname(REPO), "shared", "data", "mesh", "joint.stl")
 
 # Runs inside FreeCAD. CONFIG is filled in by the test. Always ends with os._exit(): the GUI
 # would otherwise keep running (and os._exit also keeps FreeCAD from saving its preferences).
@@ -318,6 +320,19 @@ def run():
     doc.removeObject("Big")
     doc.recompute()
 
+    # A real mesh from the shared test data, read as a user would (File > Import).
+    import Mesh as MeshModule
+    MeshModule.insert(CONFIG["shared_mesh"], doc.Name)
+    joint = doc.Objects[-1]
+    new = run_on(doc, joint, "Idealize_SegmentIdealize")
+    if new:
+        result["shared"] = {"facets": joint.Mesh.CountFacets, "labels": len(new[0].Labels),
+                            "features": new[0].Features, "types": sorted(type_color_counts(new[0].FaceColors))}
+    doc.removeObject(joint.Name)
+    for obj in new:
+        doc.removeObject(obj.Name)
+    doc.recompute()
+
     # A mesh the core rejects: the transaction is aborted and the error is shown.
     empty = doc.addObject("Mesh::Feature", "Empty")
     doc.recompute()
@@ -345,6 +360,7 @@ def run_driver(tmp_path, attempt):
               "screenshot_types": str(tmp_path / "idealize-gui.png"),
               "screenshot_deviation": str(tmp_path / "deviation-gui.png"),
               "screenshot_panel": str(tmp_path / "panel-gui.png"), "fcstd": str(tmp_path / "layer.FCStd"),
+              "shared_mesh": SHARED_MESH,
               "screenshot_solid": str(tmp_path / "solid-gui.png"), "step": str(tmp_path / "part.step")}
     script = tmp_path / ("driver%d.py" % attempt)
     script.write_text(DRIVER.replace("__CONFIG__", repr(json.dumps(config))))
@@ -365,6 +381,7 @@ def test_segment_command_in_freecad_gui(tmp_path):
     for tool in ("xvfb-run", "freecad", "timeout"):
         if shutil.which(tool) is None:
             pytest.skip("%s is not installed; the GUI test runs FreeCAD under xvfb-run" % tool)
+    assert os.path.exists(SHARED_MESH), "the shared test data must sit beside the repository: %s" % SHARED_MESH
 
     # The first run after the link was (re)created only creates it: FreeCAD must restart.
     result, config = run_driver(tmp_path, 1)
@@ -439,6 +456,10 @@ def test_segment_command_in_freecad_gui(tmp_path):
     assert recomputed["touched"] is False and abs(recomputed["x_min"] - 5.0) < 1e-6
     assert recomputed["labels"] == result["source_before"][1]
     assert result["objects_after_idealize"] == ["Part"]
+
+    shared = result["shared"]
+    assert shared["labels"] == shared["facets"] > 20000 and shared["features"] >= 5
+    assert {"plane", "cylinder"} <= set(shared["types"]), shared
 
     cancel = result["cancel"]
     assert cancel["visible"] is True, "no progress dialog during a long run"

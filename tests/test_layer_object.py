@@ -105,6 +105,47 @@ def test_layer_recomputes_when_source_or_options_change(document):
 
 
 @needs_freecad
+def test_new_layers_take_their_options_from_the_preferences(document):
+    FreeCAD, doc = document
+    import idealize
+    from idealize import layer_object
+    params = FreeCAD.ParamGet(layer_object.PARAMETER_PATH)
+    try:
+        params.SetFloat("AngleTolerance", 2.5)
+        params.SetInt("RadiusTolerancePercent", 2)
+        params.SetBool("IdealizeRelations", False)
+        source, _, _ = bracket_object(doc)
+        layer = idealize.make_feature_layer(source)
+        assert float(layer.AngleTolerance) == 2.5 and layer.RadiusTolerance == 2 and layer.IdealizeRelations is False
+        assert layer_object.object_options(layer) == {"angle_tolerance": 2.5, "distance_tolerance": None,
+                                                      "radius_tolerance": 0.02, "idealize_relations": False}
+    finally:
+        for key in ("AngleTolerance", "RadiusTolerancePercent", "IdealizeRelations"):
+            params.RemFloat(key)
+            params.RemInt(key)
+            params.RemBool(key)
+
+
+def test_preference_page_names_the_parameters_read():
+    """The preferences page (.ui) writes exactly the parameters the layer reads."""
+    import os
+    import xml.etree.ElementTree as ElementTree
+    from idealize import layer_object
+    path = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "Resources", "ui",
+                        "PreferencesIdealize.ui")
+    widgets = ElementTree.parse(path).getroot().iter("widget")
+    entries = {}
+    for widget in widgets:
+        props = {p.get("name"): p.find("cstring").text for p in widget.findall("property") if p.find("cstring") is not None}
+        if "prefEntry" in props:
+            assert props["prefPath"] == "Mod/Idealize" and layer_object.PARAMETER_PATH.endswith(props["prefPath"])
+            entries[props["prefEntry"]] = widget.get("class")
+    kinds = {"App::PropertyAngle": "Gui::PrefDoubleSpinBox", "App::PropertyDistance": "Gui::PrefDoubleSpinBox",
+             "App::PropertyPercent": "Gui::PrefSpinBox", "App::PropertyBool": "Gui::PrefCheckBox"}
+    assert entries == {key: kinds[kind] for _, kind, key, _, _ in layer_object.OPTIONS}
+
+
+@needs_freecad
 def test_layer_refuses_bad_input(document):
     FreeCAD, doc = document
     import idealize

@@ -77,12 +77,21 @@ def _hide_source(source, result):
 
 
 def _new_layer(source):
-    """Compute a feature layer of a mesh object with the preferences' options (with progress)."""
+    """A :class:`LayerRecord` of a mesh object with the preferences' options, computed in a worker
+    thread with progress: the worker reads a private copy of the mesh, never the document."""
     options = layer_object.layer_options(layer_object.preferences())
-    return run_with_progress("Segment & Idealize", idealize, freecad_mesh.usable_mesh(source), **options)
+    kernel = source.Mesh.copy()
+
+    def work(progress):
+        layer = idealize(freecad_mesh.usable_mesh(kernel), progress=progress, **options)
+        progress.report("preparing the document", 1.0)
+        return layer_object.LayerRecord(layer, options)
+
+    return run_with_progress("Segment & Idealize", work)
 
 
-def _describe_layer(source, layer, seconds):
+def _describe_layer(source, record, seconds):
+    layer = record.layer
     return ("Idealize: %s has %d features (%s), deviation %.3g max, in %.2f s" % (
         source.Label, len(layer.features), count_summary(layer.type_counts()), layer.deviation["max"], seconds),
         freecad_mesh.feature_table(layer))
@@ -109,8 +118,9 @@ class SegmentCommand(_MeshCommand):
             return ("Idealize: %s split into %d patches (%d transition triangles) in %.2f s" % (
                 source.Label, segmentation.n_features, int(segmentation.transition.sum()), seconds), [])
 
+        kernel = source.Mesh.copy()  # the worker reads a private copy, never the document
         _run("Segment", "Segment mesh",
-             lambda: run_with_progress("Segment", segment, freecad_mesh.usable_mesh(source)),
+             lambda: run_with_progress("Segment", lambda progress: segment(freecad_mesh.usable_mesh(kernel), progress)),
              lambda doc, segmentation: freecad_mesh.make_segmented_mesh(doc, source, segmentation), describe,
              lambda result: _hide_source(source, result))
 
@@ -174,7 +184,7 @@ class MakeSolidCommand:
 
         def compute():
             layer = (layer_object.feature_layer(selected_layer) if selected_layer is not None
-                     else _new_layer(source))
+                     else _new_layer(source).layer)
             return layer, run_with_progress("Make B-rep solid", make_solid, layer)
 
         def make_result(doc, computed):

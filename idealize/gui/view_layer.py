@@ -1,5 +1,7 @@
 """View provider of the feature layer: the idealized mesh coloured by feature type (the thesis's
 colours), by feature, or by deviation with a legend; double-click opens the task panel."""
+import json
+
 import FreeCADGui
 
 from .. import layer_object
@@ -32,7 +34,8 @@ class ViewProviderFeatureLayer:
         """Show the deviation legend when the layer is shown by deviation, hide it otherwise."""
         deviation = vobj.Visibility and getattr(vobj, "ColorBy", "Type") == "Deviation"
         if deviation:
-            top = layer_object.deviation_scale(vobj.Object)
+            obj = vobj.Object
+            top = layer_object.deviation_scale(obj.VertexDeviation, json.loads(obj.FeatureTable)["distance_tolerance"])
             self._legend(vobj).update("Deviation (mm)", top, lambda t: tuple(deviation_colors([t], 1.0)[0]))
         if self.legend is not None:
             self.legend.show(deviation)
