@@ -30,6 +30,9 @@ class FeatureLayer:
         only freeform features touch it).
     segmentation: the :class:`idealize.Segmentation` the layer was built from (None for a layer
         restored from a document object).
+    mesh_check: the segmentation's mesh checks (dict, see :class:`idealize.Segmentation`), None
+        without a segmentation. oriented_faces: the input's triangles with its orientation repair
+        (the input's own array when nothing was turned over); the B-rep is built on them.
     """
 
     def __init__(self, mesh, segmentation, result):
@@ -43,6 +46,9 @@ class FeatureLayer:
         self.vertex_deviation = result["vertex_deviation"]
         self.deviation = {"max": result["max_deviation"], "rms": result["rms_deviation"]}
         self.distance_tolerance = result["distance_tolerance"]
+        self.mesh_check = segmentation.mesh_check if segmentation is not None else None
+        # The input's triangles with the orientation repair applied (the input's own when none).
+        self.oriented_faces = segmentation.oriented_faces(mesh.faces) if segmentation is not None else mesh.faces
         self.timings = dict(segmentation.timings) if segmentation is not None else {}
         self.timings.update(("features." + name, seconds) for name, seconds in result["timings"])
 
@@ -73,7 +79,7 @@ def split_range(progress, share):
 
 
 def idealize(mesh, segmentation=None, progress=None, angle_tolerance=5.0, distance_tolerance=None,
-             radius_tolerance=0.05, idealize_relations=True):
+             radius_tolerance=0.05, idealize_relations=True, self_intersections=False):
     """Segment (unless a segmentation is given), identify and relate features, project the mesh.
 
     The options rarely need changing. angle_tolerance (degrees): directions closer than this are
@@ -81,6 +87,8 @@ def idealize(mesh, segmentation=None, progress=None, angle_tolerance=5.0, distan
     centres, radii and offsets closer than this are equal (None: 0.1 % of the bounding-box
     diagonal); radius_tolerance: radii within this fraction of each other are one design radius;
     idealize_relations: make the relations exact (False: the fitted surfaces stay as they are).
+    self_intersections: have the segmentation's mesh check count crossing triangle pairs (see
+    :func:`idealize.segment`; the command line does).
 
     progress: an :class:`idealize.Progress` that another thread may read and cancel. Its
     ``fraction`` goes once from the start to the end of its ``range`` (0 to 1 unless set) over the
@@ -97,27 +105,29 @@ def idealize(mesh, segmentation=None, progress=None, angle_tolerance=5.0, distan
     options = {"angle_tolerance_degrees": float(angle_tolerance), "distance_tolerance": float(distance_tolerance or 0.0),
                "radius_tolerance": float(radius_tolerance), "idealize": bool(idealize_relations)}
     if progress is None:
-        return _idealize(mesh, segmentation, None, options)
+        return _idealize(mesh, segmentation, None, options, self_intersections)
     caller_range = progress.range
     try:
-        return _idealize(mesh, segmentation, progress, options)
+        return _idealize(mesh, segmentation, progress, options, self_intersections)
     finally:
         progress.set_range(*caller_range, restart=False)
 
 
-def _idealize(mesh, segmentation, progress, options):
+def _idealize(mesh, segmentation, progress, options, self_intersections=False):
     given = segmentation is not None
     if progress is not None:
         first, second = split_range(progress, 0.0 if given else SEGMENTATION_SHARE)
         progress.set_range(*first)  # the bar starts over with this call
     if not given:
-        segmentation = segment(mesh, progress=progress)
+        segmentation = segment(mesh, progress=progress, self_intersections=self_intersections)
     if progress is not None:
         progress.set_range(*second, restart=False)
     mean = [p["mean_curvature"] for p in segmentation.features]
     gaussian = [p["mean_gaussian"] for p in segmentation.features]
     low, high = segmentation.zero_mean_curvature
-    result = native.identify_features(mesh.vertices, mesh.faces, np.asarray(segmentation.labels),
+    # Identification and the B-rep see the triangles with the segmentation's orientation repair.
+    faces = segmentation.oriented_faces(mesh.faces)
+    result = native.identify_features(mesh.vertices, faces, np.asarray(segmentation.labels),
                                       mean, gaussian, low, high, progress=progress, **options)
     return FeatureLayer(mesh, segmentation, result)
 

@@ -109,6 +109,34 @@ def feature_table(layer):
     return lines
 
 
+def mesh_check_summary(check):
+    """One line of what the mesh checks found and repaired (see README "Mesh checks and repairs")."""
+    if not check:
+        return "mesh check: not available"
+
+    def count(n, what, plural=None):
+        return "%d %s" % (n, what if n == 1 else (plural or what + "s"))
+    found = [count(check["shells"], "shell")]
+    if check["boundary_loops"]:
+        found.append("%s (largest %d edges)" % (count(check["boundary_loops"], "hole"), check["largest_hole_edges"]))
+    else:
+        found.append("closed")
+    for key, what in (("nonmanifold_edges", "non-manifold edge"), ("nonmanifold_vertices", "non-manifold vertex"),
+                      ("nonorientable_shells", "non-orientable shell")):
+        if check[key]:
+            found.append(count(check[key], what, what.replace("vertex", "vertices") if "vertex" in what else None))
+    pairs = check["self_intersecting_pairs"]
+    if pairs >= 0:
+        found.append("%s%s" % ("at least " if check["self_intersections_capped"] else "",
+                               count(pairs, "self-intersecting triangle pair")))
+    repaired = []
+    for key, what in (("flipped_faces_repaired", "triangle turned over"), ("degenerate_removed", "degenerate triangle set aside"),
+                      ("duplicate_removed", "duplicate triangle merged")):
+        if check[key]:
+            repaired.append(count(check[key], what, what.replace("triangle", "triangles", 1)))
+    return "Mesh: %s; repaired: %s" % (", ".join(found), ", ".join(repaired) or "nothing needed")
+
+
 def patch_colors(labels, transition=None):
     """(M, 3) RGB in 0..1: one distinct pastel colour per patch id, red on transitions.
 

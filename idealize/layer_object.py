@@ -65,7 +65,8 @@ def layer_options(values):
     return {"angle_tolerance": float(values["AngleTolerance"]),
             "distance_tolerance": distance if distance > 0 else None,
             "radius_tolerance": values["RadiusTolerance"] / 100.0,
-            "idealize_relations": bool(values["IdealizeRelations"])}
+            "idealize_relations": bool(values["IdealizeRelations"]),
+            "self_intersections": True}  # the task panel shows the whole mesh check
 
 
 def object_options(obj):
@@ -177,11 +178,13 @@ class LayerRecord:
 
     def __init__(self, layer, options, mode="Type"):
         self.layer = layer
-        self.mesh_data = ply_bytes(layer.idealized_vertices, layer.mesh.faces)
+        # The triangles with the mesh check's orientation repair: the B-rep is built on them.
+        self.mesh_data = ply_bytes(layer.idealized_vertices, layer.oriented_faces)
         self.labels = np.asarray(layer.labels, dtype=np.int64).tolist()
         self.table = json.dumps(_jsonable({
             "features": layer.features, "adjacency": layer.adjacency, "relations": layer.relations,
-            "deviation": layer.deviation, "distance_tolerance": layer.distance_tolerance}))
+            "deviation": layer.deviation, "distance_tolerance": layer.distance_tolerance,
+            "mesh_check": layer.mesh_check}))
         self.vertex_deviation = np.asarray(layer.vertex_deviation, dtype=np.float64).tolist()
         self.fingerprint = fingerprint(layer.mesh, options)
         self.mode = mode
@@ -301,13 +304,16 @@ def feature_layer(obj):
     labels = np.asarray(obj.Labels, dtype=np.int32)
     if len(labels) != mesh.n_triangles:
         raise MeshError("the feature layer %s is out of date: its source mesh changed; recompute it" % obj.Label)
-    idealized = mesh_from_freecad(obj.Mesh).vertices
-    return FeatureLayer(mesh, None, {
+    idealized = mesh_from_freecad(obj.Mesh)
+    layer = FeatureLayer(mesh, None, {
         "labels": labels, "features": table["features"], "adjacency": table["adjacency"],
-        "relations": table["relations"], "idealized_vertices": idealized,
+        "relations": table["relations"], "idealized_vertices": idealized.vertices,
         "vertex_deviation": np.asarray(obj.VertexDeviation, dtype=np.float64),
         "max_deviation": table["deviation"]["max"], "rms_deviation": table["deviation"]["rms"],
         "distance_tolerance": table["distance_tolerance"], "timings": []})
+    layer.mesh_check = table.get("mesh_check")
+    layer.oriented_faces = idealized.faces  # stored with the orientation repair
+    return layer
 
 
 def make_feature_layer(source, layer=None, doc=None):

@@ -21,7 +21,9 @@ def build_report(mesh, layer, timings, step, solid=None):
         "repairs": {
             "degenerate_triangles_ignored": int(segmentation.removed_degenerate),
             "duplicate_triangles_merged": int(segmentation.removed_duplicate),
+            "orientation_fixed": int(segmentation.mesh_check["flipped_faces_repaired"]),
         },
+        "mesh_check": {key: _plain_check(value) for key, value in segmentation.mesh_check.items()},
         "labels": layer.labels,
         "transition_triangles": np.flatnonzero(segmentation.transition),
         "features": [_feature(f) for f in layer.features],
@@ -51,6 +53,10 @@ def _feature(feature):
         "curvature_type": feature["curvature_type"],
         "curvature": {key: float(value) for key, value in feature["curvature"].items()},
     }
+
+
+def _plain_check(value):
+    return bool(value) if isinstance(value, (bool, np.bool_)) else int(value)
 
 
 def _plain(value):

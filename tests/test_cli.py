@@ -133,3 +133,28 @@ def test_bad_input_exits_with_message(tmp_path):
 def test_missing_file(tmp_path):
     result = run_cli("convert", str(tmp_path / "nope.stl"), "-o", str(tmp_path / "o.step"))
     assert result.returncode == 2 and "No such file" in result.stderr
+
+
+def test_same_input_gives_identical_output(tmp_path):
+    """Byte-identical labels and report (timings aside) and STEP (its header's time stamp aside),
+    from separate processes with different thread and hashing settings: the core is
+    single-threaded and nothing depends on addresses or hash order."""
+    V, F, _ = shapes.tessellate_with_faces(shapes.bracket_solid(), 0.05)
+    rng = np.random.default_rng(7)
+    V = V + rng.normal(scale=0.02, size=V.shape)  # a scan: the hard case for exact repeats
+    path = tmp_path / "bracket.stl"
+    write_binary_stl(path, V, F)
+    outputs = []
+    for run, threads in enumerate(("1", "2")):
+        env = dict(os.environ, OMP_NUM_THREADS=threads, PYTHONHASHSEED=str(run + 11))
+        out, report = tmp_path / ("out%d.step" % run), tmp_path / ("report%d.json" % run)
+        result = subprocess.run([sys.executable, "-m", "idealize", "convert", str(path), "-o", str(out), "--report",
+                                 str(report)], cwd=ROOT, capture_output=True, text=True, timeout=300, env=env)
+        assert result.returncode in (0, 1), result.stderr
+        data = json.loads(report.read_text())
+        data.pop("timings")
+        data["step"].pop("path")
+        step = [line for line in out.read_text().splitlines() if not line.startswith("FILE_NAME")]
+        outputs.append((json.dumps(data, sort_keys=True), step))
+    assert outputs[0][0] == outputs[1][0]
+    assert outputs[0][1] == outputs[1][1]

@@ -206,7 +206,8 @@ def run():
         table = panel.form.features
         result["panel"] = {"rows": table.rowCount(), "columns": table.columnCount(),
                            "types": sorted({table.item(r, 1).text() for r in range(table.rowCount())}),
-                           "options_hidden": not panel.form.options.isVisible()}
+                           "options_hidden": not panel.form.options.isVisible(),
+                           "summary": panel.form.summary.text()}
         cylinder_row = [r for r in range(table.rowCount()) if table.item(r, 1).text() == "cylinder"][0]
         table.selectRow(cylinder_row)
         Gui.updateGui()
@@ -438,6 +439,7 @@ def test_segment_command_in_freecad_gui(tmp_path):
     panel = result["panel"]
     assert panel["rows"] == 7 and panel["columns"] == 6 and panel["types"] == ["cylinder", "plane"]
     assert panel["options_hidden"] is True and result["options_shown"] is True
+    assert "Mesh: 1 shell, closed, 0 self-intersecting triangle pairs; repaired: nothing needed" in panel["summary"]
     # Selecting the cylinder's row leaves its facets in their colour and dims all others.
     highlight = result["highlight"]
     assert highlight["bright"] == {"cylinder": highlight["cylinder_facets"],

@@ -40,13 +40,15 @@ def test_layer_object_holds_the_layer(document, tmp_path):
     layer = idealize.make_feature_layer(source)
     doc.recompute()
 
-    direct = idealize.idealize(idealize.freecad_mesh.mesh_from_freecad(source))  # single precision, as stored
+    direct = idealize.idealize(idealize.freecad_mesh.mesh_from_freecad(source),  # single precision, as stored
+                               self_intersections=True)
     assert layer.TypeId == "Mesh::FeaturePython" and layer.Label == "Bracket_Layer" and layer.Source == source
     assert list(layer.Labels) == direct.labels.tolist()
     table = json.loads(layer.FeatureTable)
     assert [f["type"] for f in table["features"]] == [f["type"] for f in direct.features]
     assert layer.Features == len(direct.features) == 11
     assert len(table["relations"]) == len(direct.relations) and table["adjacency"]
+    assert table["mesh_check"] == direct.mesh_check and table["mesh_check"]["self_intersecting_pairs"] == 0
     assert layer.Mesh.CountFacets == len(F) and layer.Mesh.CountPoints == len(V)
     idealized = idealize.freecad_mesh.mesh_from_freecad(layer.Mesh).vertices
     assert np.allclose(idealized, direct.idealized_vertices, atol=1e-5)  # single precision of Mesh
@@ -118,7 +120,8 @@ def test_new_layers_take_their_options_from_the_preferences(document):
         layer = idealize.make_feature_layer(source)
         assert float(layer.AngleTolerance) == 2.5 and layer.RadiusTolerance == 2 and layer.IdealizeRelations is False
         assert layer_object.object_options(layer) == {"angle_tolerance": 2.5, "distance_tolerance": None,
-                                                      "radius_tolerance": 0.02, "idealize_relations": False}
+                                                      "radius_tolerance": 0.02, "idealize_relations": False,
+                                                      "self_intersections": True}
     finally:
         for key in ("AngleTolerance", "RadiusTolerancePercent", "IdealizeRelations"):
             params.RemFloat(key)

@@ -9,6 +9,7 @@ import numpy as np
 
 from .. import layer_object
 from ..features import idealize
+from ..freecad_mesh import mesh_check_summary
 from .progress import run_with_progress
 
 UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
@@ -72,9 +73,10 @@ class FeatureLayerPanel:
         table = json.loads(self.obj.FeatureTable)
         self.features = table["features"]
         relations = relations_by_feature(table)
-        self.form.summary.setText("%d features of %s; deviation from the idealized surfaces: max %.4g, RMS %.4g"
+        self.form.summary.setText("%d features of %s; deviation from the idealized surfaces: max %.4g, RMS %.4g.\n%s."
                                   % (len(self.features), self.obj.Source.Label if self.obj.Source else "?",
-                                     table["deviation"]["max"], table["deviation"]["rms"]))
+                                     table["deviation"]["max"], table["deviation"]["rms"],
+                                     mesh_check_summary(table.get("mesh_check"))))
         widget = self.form.features
         widget.clear()
         widget.setColumnCount(len(COLUMNS))

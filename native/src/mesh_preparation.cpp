@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <string>
 #include <unordered_map>
 
@@ -19,6 +21,42 @@ struct TripleHash {
   }
 };
 
+std::string number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", x);
+  return text;
+}
+
+// Refuses coordinates at scales no unit of a mechanical part produces (see mesh_preparation.h);
+// returns the bounding-box diagonal of the vertices the triangles use.
+double check_scale(const TriangleMesh& input) {
+  Eigen::RowVector3d low = Eigen::RowVector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::RowVector3d high = -low;
+  for (int f = 0; f < input.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const auto p = input.V.row(input.F(f, c));
+      low = low.cwiseMin(p);
+      high = high.cwiseMax(p);
+    }
+  const double largest = std::max(low.cwiseAbs().maxCoeff(), high.cwiseAbs().maxCoeff());
+  const double diagonal = (high - low).norm();
+  if (!std::isfinite(diagonal) || largest > kMaxCoordinate)
+    throw MeshError("coordinates reach " + number(largest) + ", beyond " + number(kMaxCoordinate) +
+                    ": no unit of a real part gives such numbers, and their products overflow double "
+                    "precision; the file is probably corrupt or was written with a wrong scale factor");
+  if (!(diagonal >= kMinDiagonal))
+    throw MeshError("the mesh is only " + number(diagonal) + " units across (bounding-box diagonal; below " +
+                    number(kMinDiagonal) + "): its triangles have collapsed to a point, probably a wrong "
+                    "scale factor (a unit conversion applied twice?); rescale the mesh");
+  if (largest > kMaxOffsetRatio * diagonal)
+    throw MeshError("the part is " + number(diagonal) + " units across but lies " + number(largest) +
+                    " units from the origin (" + number(largest / diagonal) + " times its size, above " +
+                    number(kMaxOffsetRatio) + "): at that offset the coordinates cannot resolve its "
+                    "triangles; the coordinates probably carry a large offset (georeferenced, or a "
+                    "unit mix-up between part and placement); move the part near the origin");
+  return diagonal;
+}
+
 }  // namespace
 
 PreparedMesh prepare_mesh(const TriangleMesh& input, const ProgressSpan& progress) {
@@ -33,9 +71,12 @@ PreparedMesh prepare_mesh(const TriangleMesh& input, const ProgressSpan& progres
                         std::to_string(input.F(f, c)) + ", but the mesh has " + std::to_string(nv) +
                         " vertices");
 
+  // Measured on the vertices the triangles use: a stray unused vertex far away must not make
+  // every triangle look degenerate.
+  const double diagonal = check_scale(input);
+
   PreparedMesh out;
   // A triangle is degenerate when its area vanishes at the precision of the coordinates.
-  const double diagonal = bounding_box_diagonal(input);
   const double zero_area = 1e-14 * diagonal * diagonal;
   std::unordered_map<std::array<int, 3>, int, TripleHash> seen;  // sorted vertex triple -> working face
   seen.reserve(nf);

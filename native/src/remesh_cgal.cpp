@@ -12,11 +12,13 @@
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/box_intersection_d.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -222,6 +224,105 @@ TriangleMesh remesh_isotropic(const TriangleMesh& mesh, double target_edge_lengt
 
   if (sm.number_of_faces() == 0) throw MeshError("isotropic remeshing removed every triangle");
   return from_surface_mesh(sm);
+}
+
+namespace {
+
+// Stops the box intersection once enough pairs are counted.
+struct EnoughPairs {};
+
+}  // namespace
+
+long long count_self_intersections(const TriangleMesh& mesh, long long max_pairs, const ProgressSpan& progress) {
+  // Single-precision boxes rounded outwards (conservative, half the memory of doubles) carrying
+  // their triangle's corners, stored by value: measured 1.6 times faster than PMP's double boxes
+  // behind pointers on a million triangles.
+  struct Corners {
+    int v[3];
+  };
+  using Box = CGAL::Box_intersection_d::Box_with_info_d<float, 3, Corners, CGAL::Box_intersection_d::ID_EXPLICIT>;
+  const int nf = mesh.num_faces();
+  if (max_pairs <= 0 || nf < 2) return 0;
+  std::vector<Point> points;
+  points.reserve(static_cast<std::size_t>(mesh.num_vertices()));
+  for (int v = 0; v < mesh.num_vertices(); ++v) points.emplace_back(mesh.V(v, 0), mesh.V(v, 1), mesh.V(v, 2));
+  std::vector<Box> boxes;
+  boxes.reserve(static_cast<std::size_t>(nf));
+  const ProgressSpan indexing = progress.sub(0.0, 0.1);
+  for (int f = 0; f < nf; ++f) {
+    indexing.tick(f, nf);
+    const Corners t{{mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)}};
+    const Point &p = points[t.v[0]], &q = points[t.v[1]], &r = points[t.v[2]];
+    if (CGAL::collinear(p, q, r)) continue;
+    float low[3], high[3];
+    for (int k = 0; k < 3; ++k) {
+      const double lo = std::min({p[k], q[k], r[k]}), hi = std::max({p[k], q[k], r[k]});
+      low[k] = static_cast<float>(lo);
+      high[k] = static_cast<float>(hi);
+      if (static_cast<double>(low[k]) > lo) low[k] = std::nextafter(low[k], -std::numeric_limits<float>::infinity());
+      if (static_cast<double>(high[k]) < hi) high[k] = std::nextafter(high[k], std::numeric_limits<float>::infinity());
+    }
+    boxes.emplace_back(low, high, t);
+  }
+  progress.step(0.1);
+
+  const auto intersect = [&](const Corners& ft, const Corners& gt) {
+    const int* fv = ft.v;
+    const int* gv = gt.v;
+    int shared = 0, fi = -1, gi = -1;  // with one shared vertex: its corners in f and g
+    bool f_shared[3] = {false, false, false}, g_shared[3] = {false, false, false};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (fv[i] == gv[j]) {
+          ++shared;
+          f_shared[i] = g_shared[j] = true;
+          fi = i, gi = j;
+        }
+    if (shared >= 3) return false;  // prepare_mesh merged duplicates; nothing to report
+    if (shared == 2) {
+      // Along a shared edge: only coplanar triangles folded onto each other overlap.
+      int f_own = 0, g_own = 0;  // the corners not shared
+      for (int i = 0; i < 3; ++i) {
+        if (!f_shared[i]) f_own = i;
+        if (!g_shared[i]) g_own = i;
+      }
+      const Point& a = points[fv[(f_own + 1) % 3]];
+      const Point& b = points[fv[(f_own + 2) % 3]];
+      const Point& p = points[fv[f_own]];
+      const Point& q = points[gv[g_own]];
+      return CGAL::coplanar(a, b, p, q) && CGAL::coplanar_orientation(a, b, p, q) == CGAL::POSITIVE;
+    }
+    if (shared == 1) {
+      // At a shared vertex: the opposite side of one crosses the other triangle. Cheap exit first:
+      // each opposite side lies strictly on one side of the other triangle's plane.
+      const Point& v = points[fv[fi]];
+      const Point &a1 = points[fv[(fi + 1) % 3]], &b1 = points[fv[(fi + 2) % 3]];
+      const Point &a2 = points[gv[(gi + 1) % 3]], &b2 = points[gv[(gi + 2) % 3]];
+      const CGAL::Orientation oa2 = CGAL::orientation(v, a1, b1, a2);
+      if (oa2 != CGAL::COPLANAR && oa2 == CGAL::orientation(v, a1, b1, b2)) {
+        const CGAL::Orientation oa1 = CGAL::orientation(v, a2, b2, a1);
+        if (oa1 != CGAL::COPLANAR && oa1 == CGAL::orientation(v, a2, b2, b1)) return false;
+      }
+      const Kernel::Triangle_3 tf(v, a1, b1), tg(v, a2, b2);
+      return CGAL::do_intersect(tf, Kernel::Segment_3(a2, b2)) || CGAL::do_intersect(tg, Kernel::Segment_3(a1, b1));
+    }
+    return CGAL::do_intersect(Kernel::Triangle_3(points[fv[0]], points[fv[1]], points[fv[2]]),
+                              Kernel::Triangle_3(points[gv[0]], points[gv[1]], points[gv[2]]));
+  };
+
+  long long pairs = 0, candidates = 0;
+  const auto callback = [&](const Box& a, const Box& b) {
+    progress.poll(++candidates, 1 << 14);
+    if (!intersect(a.info(), b.info())) return;
+    if (++pairs >= max_pairs) throw EnoughPairs();
+  };
+  try {
+    // A larger cutoff than PMP's 2000 (brute force below it) measured faster on scans.
+    CGAL::box_self_intersection_d<CGAL::Sequential_tag>(boxes.begin(), boxes.end(), callback, std::ptrdiff_t(10000));
+  } catch (const EnoughPairs&) {
+  }
+  progress.step(1.0);
+  return pairs;
 }
 
 std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points, std::vector<double>* distances,

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <queue>
 
 namespace idealize {
@@ -224,19 +225,41 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
   const ProgressSpan progress(options.progress, "prepare");
   progress.step(0.0);  // a cancelled Progress stops here, before any work
 
-  const PreparedMesh prepared = prepare_mesh(input, progress.sub(0.0, 0.04));
+  PreparedMesh prepared = prepare_mesh(input, progress.sub(0.0, 0.04));
   out.removed_degenerate = prepared.removed_degenerate;
   out.removed_duplicate = prepared.removed_duplicate;
   {
-    const MeshTopology topology(prepared.mesh);
+    std::optional<MeshTopology> topology(std::in_place, prepared.mesh);
     progress.step(0.055);
-    std::vector<int> shell;
-    out.shells = face_components(topology, std::vector<int>(prepared.mesh.num_faces(), 0), shell);
-    progress.step(0.07);
-    out.boundary_edges = topology.num_boundary_edges();
-    out.nonmanifold_edges = topology.num_nonmanifold_edges();
     timer.stage("prepare");
-    out.working = refine_long_triangles(prepared.mesh, topology, options.refinement, progress.sub("refine", 0.07, 0.16));
+    // Checks; the orientation repair turns faces of the working copy over (the corners of a turned
+    // face change places, so its adjacency is rebuilt).
+    out.mesh_check = check_mesh(prepared.mesh, *topology, options.check, progress.sub("check", 0.055, 0.07));
+    out.mesh_check.degenerate_removed = prepared.removed_degenerate;
+    out.mesh_check.duplicate_removed = prepared.removed_duplicate;
+    out.mesh_check.unused_vertices_removed = prepared.removed_unused_vertices;
+    if (!out.mesh_check.flipped.empty()) {
+      apply_orientation(prepared.mesh, out.mesh_check);
+      // The same repair in input terms, for the later stages that work on the input's triangles; a
+      // duplicate takes the orientation of the triangle it repeats.
+      const std::vector<char>& flipped = out.mesh_check.flipped;
+      out.input_flipped.assign(input.num_faces(), 0);
+      for (int f = 0; f < input.num_faces(); ++f) {
+        const int w = prepared.input_face[f];
+        if (w < 0) continue;
+        const int origin = prepared.face_origin[w];
+        bool reversed = false;  // f lists the vertices of `origin` in the opposite cyclic order
+        if (origin != f) {
+          const int k = input.F(f, 0) == input.F(origin, 0) ? 0 : input.F(f, 0) == input.F(origin, 1) ? 1 : 2;
+          reversed = input.F(f, 1) != input.F(origin, (k + 1) % 3);
+        }
+        out.input_flipped[f] = static_cast<char>(flipped[w] ^ (reversed ? 1 : 0));
+      }
+      out.mesh_check.flipped = {};
+      topology.emplace(prepared.mesh);
+    }
+    timer.stage("check");
+    out.working = refine_long_triangles(prepared.mesh, *topology, options.refinement, progress.sub("refine", 0.07, 0.16));
     for (int& origin : out.working.face_origin) origin = prepared.face_origin[origin];
   }
   const TriangleMesh& mesh = out.working.mesh;

@@ -19,6 +19,7 @@
 #include "denoising.h"
 #include "histogram.h"
 #include "mesh.h"
+#include "mesh_check.h"
 #include "progress.h"
 #include "refinement.h"
 
@@ -40,6 +41,8 @@ struct SegmentationOptions {
   // Pass 1 calls a vertex sharp when its curvature radius is below this many local edge lengths:
   // fewer than about three edges per quarter circle cannot tell a round from a sharp edge.
   double sharp_radius_in_edges = 2.0;
+  // The checks of the prepared mesh (and whether they count self-intersections).
+  MeshCheckOptions check;
   // Receives the progress (0..1 over the call) and is polled for cancellation (throws Cancelled).
   Progress* progress = nullptr;
 };
@@ -73,7 +76,11 @@ struct Segmentation {
   double zero_low = 0.0, zero_high = 0.0;  // effective zero of H: the histogram range holding 0
 
   int removed_degenerate = 0, removed_duplicate = 0;
-  int shells = 0, boundary_edges = 0, nonmanifold_edges = 0;  // of the prepared input
+  // The findings of check_mesh on the prepared input (its `flipped` left empty); the working mesh
+  // has the repaired orientation.
+  MeshCheck mesh_check;
+  // Per input face: turned over by the orientation repair (empty when none is).
+  std::vector<char> input_flipped;
   std::vector<std::pair<std::string, double>> timings;  // seconds per stage, in order
 };
 
