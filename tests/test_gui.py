@@ -334,6 +334,41 @@ def run():
         doc.removeObject(obj.Name)
     doc.recompute()
 
+    # Bad input of every class through Segment & Idealize: a clear error (box, report view) and an
+    # untouched document, or a layer whose panel names the repair; FreeCAD never goes down.
+    from idealize.layer_object import freecad_mesh as exact_mesh
+    box = MeshPart.meshFromShape(Shape=Part.makeBox(30, 20, 10), MaxLength=2.0)
+    points, facets = box.Topology
+    V = [[p.x, p.y, p.z] for p in points]
+    F = [list(f) for f in facets]
+    far = [[x + 1e9, y, z] for x, y, z in V]
+    half_flipped = [f[::-1] if i % 2 else f for i, f in enumerate(F)]
+    shifted = [[x + 15, y + 10, z + 5] for x, y, z in V]
+    cases = {"nan": ([[float("nan"), y, z] if i == 0 else [x, y, z] for i, (x, y, z) in enumerate(V)], F),
+             "collapsed": ([[1e-12 * c for c in p] for p in V], F),
+             "far_from_origin": (far, F),
+             "flipped": (V, half_flipped),
+             "open": (V, F[:-6]),
+             "self_intersecting": (V + shifted, F + [[i + len(V) for i in f] for f in F])}
+    result["bad_input"] = {}
+    for name, (points, faces) in cases.items():
+        obj = doc.addObject("Mesh::Feature", "Bad_" + name)
+        obj.Mesh = exact_mesh(points, faces)
+        doc.recompute()
+        boxes = len(result["error_boxes"])
+        undo_count = len(doc.UndoNames)
+        new = run_on(doc, obj, "Idealize_SegmentIdealize")
+        outcome = {"new": len(new), "undo_added": len(doc.UndoNames) - undo_count,
+                   "error": result["error_boxes"][boxes:]}
+        if new:
+            import json as _json
+            outcome["check"] = _json.loads(new[0].FeatureTable)["mesh_check"]
+            outcome["features"] = new[0].Features
+        result["bad_input"][name] = outcome
+        for o in new + [obj]:
+            doc.removeObject(o.Name)
+        doc.recompute()
+
     # A mesh the core rejects: the transaction is aborted and the error is shown.
     empty = doc.addObject("Mesh::Feature", "Empty")
     doc.recompute()
@@ -480,6 +515,14 @@ def test_segment_command_in_freecad_gui(tmp_path):
     assert result["step"] == {"solids": 1, "faces": 7, "valid": True}
     assert result["objects_after_solid_undo"] == ["Part"]
 
+    bad = result["bad_input"]
+    for name, words in (("nan", "NaN"), ("collapsed", "collapsed"), ("far_from_origin", "origin")):
+        assert bad[name]["new"] == 0 and bad[name]["undo_added"] == 0, (name, bad[name])
+        assert len(bad[name]["error"]) == 1 and words in bad[name]["error"][0], (name, bad[name])
+    assert bad["flipped"]["check"]["flipped_faces_repaired"] > 0 and bad["flipped"]["features"] == 6
+    assert bad["open"]["check"]["boundary_loops"] == 1 and not bad["open"]["error"]
+    assert bad["self_intersecting"]["check"]["self_intersecting_pairs"] > 0 and bad["self_intersecting"]["check"]["shells"] == 2
+
     assert result["objects_after_error"] == ["Part", "Empty"]
     assert result["undo_added_by_error"] == 0
-    assert len(result["error_boxes"]) == 1 and "no triangles" in result["error_boxes"][0]
+    assert len(result["error_boxes"]) == 4 and "no triangles" in result["error_boxes"][-1]
