@@ -83,11 +83,3 @@ class ViewProviderFeatureLayer:
 
     def loads(self, state):
         return None
-
-
-def show_layer(obj):
-    """Display settings of a new layer: its colours on, its source hidden (they coincide)."""
-    vobj = obj.ViewObject
-    vobj.Coloring = True
-    if obj.Source is not None and obj.Source.ViewObject is not None:
-        obj.Source.ViewObject.Visibility = False
