@@ -114,9 +114,8 @@ def _make_solid(layer, tolerance, progress):
     start_time = time.perf_counter()
     types = [f["type"] for f in layer.features]
     params = [dict(f["params"]) for f in layer.features]
-    faces = getattr(layer, "oriented_faces", None)  # with the segmentation's orientation repair
-    faces = mesh.faces if faces is None else faces
-    brep = native.build_brep(mesh.vertices, faces, np.asarray(layer.labels, dtype=np.int32),
+    # The triangles with the segmentation's orientation repair.
+    brep = native.build_brep(mesh.vertices, layer.oriented_faces, np.asarray(layer.labels, dtype=np.int32),
                              types, params, tolerance, progress=progress)
     timings = dict(brep.timings)
     timings["brep"] = time.perf_counter() - start_time

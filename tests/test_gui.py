@@ -42,15 +42,23 @@ def ensure_link():
     return True
 
 
-def red_and_colour_counts(path):
-    """Screenshot pixels: how many are red, and how many hues (30 degree bins) cover at least
-    0.5% of it each; shading changes brightness, not hue, so one colour is one hue."""
+def screenshot_pixels(path):
+    """All pixels of a screenshot as (n, 3) RGB ints, and those that are coloured (not white,
+    black or grey)."""
     import numpy as np
     from PySide import QtGui
     image = QtGui.QImage(path).convertToFormat(QtGui.QImage.Format_RGB32)
     bgra = np.frombuffer(bytes(image.constBits()), np.uint8).reshape(image.height(), -1, 4)
     rgb = bgra[:, :image.width(), 2::-1].reshape(-1, 3).astype(int)
-    coloured = rgb[rgb.max(axis=1) - rgb.min(axis=1) > 40]  # not white, black or grey
+    return rgb, rgb[rgb.max(axis=1) - rgb.min(axis=1) > 40]
+
+
+def red_and_colour_counts(path):
+    """Screenshot pixels: how many are red, and how many hues (30 degree bins) cover at least
+    0.5% of it each; shading changes brightness, not hue, so one colour is one hue."""
+    import numpy as np
+    from PySide import QtGui
+    rgb, coloured = screenshot_pixels(path)
     red, area = 0, {}
     for (r, g, b), n in zip(*(a.tolist() for a in np.unique(coloured, axis=0, return_counts=True))):
         if r > 100 and g < r / 2 and b < r / 2:
@@ -63,12 +71,8 @@ def red_and_colour_counts(path):
 
 def dominant_hue(path):
     """Hue (degrees, 30 degree bins) that covers most of the coloured pixels of a screenshot."""
-    import numpy as np
     from PySide import QtGui
-    image = QtGui.QImage(path).convertToFormat(QtGui.QImage.Format_RGB32)
-    bgra = np.frombuffer(bytes(image.constBits()), np.uint8).reshape(image.height(), -1, 4)
-    rgb = bgra[:, :image.width(), 2::-1].reshape(-1, 3).astype(int)
-    coloured = rgb[rgb.max(axis=1) - rgb.min(axis=1) > 40]
+    _, coloured = screenshot_pixels(path)
     hues = [QtGui.QColor(*map(int, c)).hue() // 30 * 30 for c in coloured[::7]]
     return max(set(hues), key=hues.count) if hues else None
 

@@ -76,7 +76,7 @@ def _hide_source(source, result):
     source.ViewObject.Visibility = False
 
 
-def _new_layer(source):
+def _new_layer(title, source):
     """A :class:`LayerRecord` of a mesh object with the preferences' options, computed in a worker
     thread with progress: the worker reads a private copy of the mesh, never the document."""
     options = layer_object.layer_options(layer_object.preferences())
@@ -87,14 +87,20 @@ def _new_layer(source):
         progress.report("preparing the document", 1.0)
         return layer_object.LayerRecord(layer, options)
 
-    return run_with_progress("Segment & Idealize", work)
+    return run_with_progress(title, work)
 
 
-def _describe_layer(source, record, seconds):
-    layer = record.layer
-    return ("Idealize: %s has %d features (%s), deviation %.3g max, in %.2f s" % (
-        source.Label, len(layer.features), count_summary(layer.type_counts()), layer.deviation["max"], seconds),
-        freecad_mesh.feature_table(layer))
+def _add_layer(title, transaction, source, show):
+    """A new feature layer of a mesh object, in one transaction (the shared body of the commands
+    that make one)."""
+    def describe(record, seconds):
+        layer = record.layer
+        return ("Idealize: %s has %d features (%s), deviation %.3g max, in %.2f s" % (
+            source.Label, len(layer.features), count_summary(layer.type_counts()), layer.deviation["max"], seconds),
+            freecad_mesh.feature_table(layer))
+
+    _run(title, transaction, lambda: _new_layer(title, source),
+         lambda doc, record: layer_object.make_feature_layer(source, record), describe, show)
 
 
 class _MeshCommand:
@@ -134,10 +140,7 @@ class SegmentIdealizeCommand(_MeshCommand):
 
     def Activated(self):
         source = _selected_mesh()
-        _run("Segment & Idealize", "Segment and idealize mesh", lambda: _new_layer(source),
-             lambda doc, layer: layer_object.make_feature_layer(source, layer),
-             lambda layer, seconds: _describe_layer(source, layer, seconds),
-             lambda obj: _hide_source(source, obj))
+        _add_layer("Segment & Idealize", "Segment and idealize mesh", source, lambda obj: _hide_source(source, obj))
 
 
 class DeviationMapCommand:
@@ -162,9 +165,7 @@ class DeviationMapCommand:
             _hide_source(source, obj)
             obj.ViewObject.ColorBy = "Deviation"
 
-        _run("Deviation map", "Deviation map", lambda: _new_layer(source),
-             lambda doc, computed: layer_object.make_feature_layer(source, computed),
-             lambda computed, seconds: _describe_layer(source, computed, seconds), show)
+        _add_layer("Deviation map", "Deviation map", source, show)
 
 
 class MakeSolidCommand:
@@ -184,7 +185,7 @@ class MakeSolidCommand:
 
         def compute():
             layer = (layer_object.feature_layer(selected_layer) if selected_layer is not None
-                     else _new_layer(source).layer)
+                     else _new_layer("Segment & Idealize", source).layer)
             return layer, run_with_progress("Make B-rep solid", make_solid, layer)
 
         def make_result(doc, computed):
