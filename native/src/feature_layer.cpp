@@ -10,6 +10,7 @@
 #include <array>
 #include <chrono>
 #include <functional>
+#include <limits>
 #include <set>
 #include <cmath>
 
@@ -226,17 +227,33 @@ std::vector<char> reassign_faces(const TriangleMesh& mesh, const MeshTopology& t
   return changed;
 }
 
+// Whether `surface` explains every point of `data` to within `distance` and every sample normal
+// to within `angle` (radians): on an exact tessellation a merge must not hide one stray facet in an
+// RMS over many.
+bool explains_every_point(const Surface& surface, const PatchPoints& data, double distance, double angle) {
+  for (Eigen::Index i = 0; i < data.points.rows(); ++i)
+    if (std::abs(signed_distance(surface, data.points.row(i).transpose())) > distance) return false;
+  const double cos_angle = std::cos(angle);
+  for (Eigen::Index i = 0; i < data.sample_points.rows(); ++i) {
+    if (!(data.sample_weights[i] > 0.0)) continue;
+    const Eigen::Vector3d n = surface_normal(surface, data.sample_points.row(i).transpose());
+    if (std::abs(n.dot(data.sample_normals.row(i).transpose())) < cos_angle) return false;
+  }
+  return true;
+}
+
 // Merges adjacent patches whose union one surface fits as well as each part alone: a fillet or a
 // cylinder that segmentation split along the facet folds of a coarse tessellation. Patches of one
 // type are refitted together; a patch too small to have interior vertices may also join a
 // neighbour of another type (a single facet of a fillet is planar). Plain RMS values decide
 // here, not the robust spreads, which would not see a small foreign face in the union. Each patch
 // merges at most once per call; `rejected` remembers the pairs that did not fit together until one
-// of them grows. Returns whether any pair merged.
+// of them grows. On an exact tessellation (`exact`) the merged surface must also explain every
+// vertex to within `exact_distance` and every facet normal. Returns whether any pair merged.
 bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<PatchPoints>& points,
                    const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
-                   const FeatureOptions& options, double tolerance, std::vector<Feature>& features,
-                   std::vector<int>& labels, std::set<std::pair<int, int>>& rejected, const ProgressSpan& progress) {
+                   const FeatureOptions& options, double tolerance, bool exact, double exact_distance,
+                   std::vector<Feature>& features, std::vector<int>& labels, std::set<std::pair<int, int>>& rejected, const ProgressSpan& progress) {
   std::vector<std::pair<int, int>> pairs;
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int c = 0; c < 3; ++c) {
@@ -268,7 +285,13 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     const double limit = options.residual_ratio * std::max(fa.rms, fb.rms) + kExactFraction * tolerance;
     const double normal_limit = options.residual_ratio * std::max(fa.normal_rms, fb.normal_rms) + normal_floor;
     auto accepted = [&](const Feature& u) {
-      return u.type != SurfaceType::Freeform && u.rms <= limit && u.normal_rms <= normal_limit;
+      if (u.type == SurfaceType::Freeform || u.rms > limit || u.normal_rms > normal_limit) return false;
+      if (!exact) return true;
+      // The facet normals of a coarse curved face deviate from the surface's at their centroids by
+      // a little of the facet angle: as much as in the parts is allowed, plus the floor.
+      const double angle = 3.0 * std::max({u.normal_spread, fa.normal_spread, fb.normal_spread}) + normal_floor;
+      return explains_every_point(u.surface, pa, exact_distance, angle) &&
+             explains_every_point(u.surface, pb, exact_distance, angle);
     };
     // A small piece joins its neighbour's surface; two small pieces may make a new one.
     Feature merged = larger;
@@ -554,7 +577,10 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   };
   const double diagonal = bounding_box_diagonal(mesh);
   layer.distance_tolerance = options.distance_tolerance > 0.0 ? options.distance_tolerance : 1e-3 * diagonal;
-  const double floor = 1e-6 * diagonal;  // rounding of single-precision STL coordinates, with margin
+  // The rounding of single-precision (STL) coordinates, with margin: their spacing grows with the
+  // distance from the origin, which a part far out in its assembly's frame shows.
+  const double floor =
+      std::max(1e-6 * diagonal, 2.0 * std::numeric_limits<float>::epsilon() * mesh.V.cwiseAbs().maxCoeff());
 
   const MeshTopology topology(mesh);
   const Eigen::VectorXd area = face_areas(mesh);
@@ -616,6 +642,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   };
   reassign(progress.sub("reassign", 0.06, 0.19));
   stage("reassign");
+  bool exact_mesh = false;  // decided below
   const ProgressSpan split = progress.sub("split", 0.19, 0.355);
   split.step(0.0);
   // Split what no surface fits into planar regions (and, on noisy meshes, the connected rest);
@@ -632,21 +659,31 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     if (!rms.empty()) {
       std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
       std::nth_element(normal_rms.begin(), normal_rms.begin() + normal_rms.size() / 2, normal_rms.end());
-      const bool exact = rms[rms.size() / 2] < kExactFraction * layer.distance_tolerance;
+      exact_mesh = rms[rms.size() / 2] < kExactFraction * layer.distance_tolerance;
       const double noise = rms[rms.size() / 2] + floor;
       const double normal_noise = normal_rms[normal_rms.size() / 2] + options.normal_floor_degrees * M_PI / 180.0;
       int next_id = num_patches;
       // Measured on the benchmark: without the tolerance term, sculpted (undulating) patches split
-      // into pieces that do not join again.
-      const double split_above = options.split_ratio * noise + layer.distance_tolerance;
-      auto badly_fitting = [&](const Feature& f) { return f.type == SurfaceType::Freeform || f.rms > split_above; };
+      // into pieces that do not join again. An exact tessellation does not undulate: what does not
+      // fit it exactly is split.
+      const double split_above =
+          options.split_ratio * noise + (exact_mesh ? kExactFraction : 1.0) * layer.distance_tolerance;
+      // There normals count too: a patch fitted to its interior vertices does not see a whole coarse
+      // face whose vertices all lie on its rim (a small CAD cylinder inside a plane's patch). On a
+      // noisy mesh, where every face has interior vertices, this would split patches that merely
+      // have a rough rim (measured on the benchmark).
+      const double split_normals_above =
+          exact_mesh ? options.split_ratio * normal_noise : std::numeric_limits<double>::infinity();
+      auto badly_fitting = [&](const Feature& f) {
+        return f.type == SurfaceType::Freeform || f.rms > split_above || f.normal_rms > split_normals_above;
+      };
       for (int p = 0; p < num_patches; ++p) {
         split.sub(0.0, 0.5).step(static_cast<double>(p) / num_patches);
         const Feature& f = layer.features[p];
         if (badly_fitting(f)) {
-          next_id = split_patch(mesh, topology, area, p, noise, normal_noise, exact ? 1 : 2 * kInteriorPoints, layer.labels,
-                                next_id, split);
-          was_split[p] = exact ? 1 : 2;
+          next_id = split_patch(mesh, topology, area, p, noise, normal_noise, exact_mesh ? 1 : 2 * kInteriorPoints,
+                                layer.labels, next_id, split);
+          was_split[p] = exact_mesh ? 1 : 2;
         }
       }
       if (next_id > num_patches) {
@@ -670,16 +707,19 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   const int patches = static_cast<int>(layer.features.size());
   stage("reassign_after_split");
   std::set<std::pair<int, int>> rejected;
+  const double exact_distance = std::max(kExactFraction * layer.distance_tolerance, 2.0 * floor);
   // Later passes refit fewer open pairs, and most runs stop early: each pass takes a third of
   // what is left of the span.
   const ProgressSpan merge = progress.sub("merge", 0.5, 0.87);
   double merged_so_far = 0.0;
-  for (int pass = 0; pass < options.merge_passes; ++pass) {
+  // Every merge removes a patch, so on an exact tessellation merging runs until nothing fits together.
+  const int merge_passes = exact_mesh ? patches : options.merge_passes;
+  for (int pass = 0; pass < merge_passes; ++pass) {
     const double share = (1.0 - merged_so_far) / 3.0;
     const ProgressSpan this_pass = merge.sub(merged_so_far, merged_so_far + share);
     merged_so_far += share;
-    if (!merge_patches(mesh, topology, points, identify_points, options, layer.distance_tolerance, layer.features,
-                       layer.labels, rejected, this_pass.sub(0.0, 0.9)))
+    if (!merge_patches(mesh, topology, points, identify_points, options, layer.distance_tolerance, exact_mesh,
+                       exact_distance, layer.features, layer.labels, rejected, this_pass.sub(0.0, 0.9)))
       break;
     this_pass.step(0.9);
     points = patch_points(mesh, layer.labels, patches);

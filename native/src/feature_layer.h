@@ -57,7 +57,8 @@ struct FeatureOptions {
   // followed by refitting the patches that changed.
   int reassignment_rounds = 10;
   // Passes of merging adjacent patches that one surface fits together (each patch merges at most
-  // once per pass).
+  // once per pass) on a noisy mesh; more join undulating neighbours. On an exact tessellation, where
+  // a merge must explain every vertex, merging runs until nothing fits together.
   int merge_passes = 8;
   // Make the relations exact and snap axes to the part's ideal directions (idealization.h) before
   // the mesh is projected.
