@@ -107,6 +107,21 @@ def tessellate_with_faces(solid, tolerance):
     return unique, F.astype(np.int32), np.array(gt, np.int32)
 
 
+def cad_export(solid, linear, angular):
+    """What a CAD system's STL export gives: one BRepMesh run over the solid (shared edge vertices)
+    with the given absolute linear and angular deflection, and the B-rep face of every triangle."""
+    _, _, MeshPart = freecad()
+    mesh = MeshPart.meshFromShape(Shape=solid, LinearDeflection=float(linear), AngularDeflection=float(angular),
+                                  Relative=False, Segments=True)
+    points, facets = mesh.Topology
+    gt = np.empty(len(facets), np.int32)
+    for face in range(mesh.countSegments()):  # one segment per face, in order
+        gt[np.asarray(mesh.getSegment(face), np.int64)] = face
+    V = np.array([(p.x, p.y, p.z) for p in points], np.float64)
+    unique, inverse = np.unique(V, axis=0, return_inverse=True)  # weld the faces' shared edge vertices
+    return unique, inverse.reshape(-1)[np.array(facets, np.int64)].astype(np.int32), gt
+
+
 def triangle_areas(V, F):
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)

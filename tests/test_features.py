@@ -267,6 +267,48 @@ def test_cone_sphere_and_torus_faces(make, faces):
     assert len(layer.features) == len(faces)  # one feature per face, no fragments on tangent edges
 
 
+def plate_with_shallow_bosses():
+    """Three bosses lower than their radius: a coarse export puts every vertex of a boss's side on
+    its two rim circles, so a plane fitted to the interior vertices of the plate's patch cannot see it."""
+    FreeCAD, Part, _ = shapes.freecad()
+    plate = Part.makeBox(80, 50, 6)
+    for x, radius, height in ((20, 3, 0.8), (40, 5, 1.5), (60, 2, 0.5)):
+        plate = plate.fuse(Part.makeCylinder(radius, height, FreeCAD.Vector(x, 25, 6)))
+    return plate.removeSplitter()
+
+
+def stepped_shaft():
+    """Coaxial cylinders on annular shoulders: the rims of a shoulder and of the cylinder above it lie
+    on one torus, which only the crease between them rules out."""
+    FreeCAD, Part, _ = shapes.freecad()
+    shaft = Part.makeCylinder(20, 5).fuse(Part.makeCylinder(12, 8, FreeCAD.Vector(0, 0, 5)))
+    return shaft.fuse(Part.makeCylinder(6, 10, FreeCAD.Vector(0, 0, 13))).removeSplitter()
+
+
+def box():
+    """Twelve triangles whose corners lie on one sphere (and any two sides on a cylinder)."""
+    return shapes.freecad()[1].makeBox(10, 20, 30)
+
+
+@needs_freecad
+@pytest.mark.parametrize("make", [plate_with_shallow_bosses, stepped_shaft, box])
+@pytest.mark.parametrize("deflection", [(1e-3, 0.35), (3e-3, 0.5)])
+@pytest.mark.parametrize("offset", [0.0, 5000.0])
+def test_cad_export_gives_one_feature_per_face(make, deflection, offset):
+    """A CAD system's STL export (one BRepMesh run, single-precision coordinates), also of a part far
+    from the origin, where the coordinates' rounding grows: every face one feature of its type."""
+    solid = make()
+    linear, angular = deflection
+    V, F, gt = shapes.cad_export(solid, linear * solid.BoundBox.DiagonalLength, angular)
+    V = (V + offset).astype(np.float32).astype(np.float64)
+    layer = idealize.idealize(idealize.Mesh(V, F))
+    areas = shapes.triangle_areas(V, F)
+    assert correct_faces(layer.labels, gt, areas) == len(solid.Faces)
+    assert len(layer.features) == len(solid.Faces)
+    assert sorted(f["type"] for f in dominant(layer, gt, areas)) == sorted(
+        FREECAD_TYPES[type(f.Surface).__name__] for f in solid.Faces)
+
+
 # ---------------------------------------------------------------- 3. the scan-like bracket
 @pytest.fixture(scope="module")
 def noisy_scan(bracket_scan):

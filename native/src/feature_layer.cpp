@@ -11,6 +11,7 @@
 #include <chrono>
 #include <functional>
 #include <limits>
+#include <map>
 #include <set>
 #include <cmath>
 
@@ -26,6 +27,10 @@ constexpr int kInteriorPoints = 24;
 // A fit is exact when its residual is below this fraction of the distance tolerance: the vertices of
 // a CAD tessellation lie on their faces (up to the file's float precision).
 constexpr double kExactFraction = 0.01;
+// A CAD exporter tessellates a curved face finer than a facet turn of 45° (a quarter circle in two
+// facets): on an exact tessellation a sharper crease is an edge between two faces, even where one
+// surface passes through both (the corners of a box lie on a sphere).
+constexpr double kLargestFacetTurn = 0.25 * M_PI;
 
 // The surface types in the order a designer models them (thesis 4.3), which is also the order of
 // preference when several fit: a short band of a large sphere fits as well as the cylinder it
@@ -227,19 +232,170 @@ std::vector<char> reassign_faces(const TriangleMesh& mesh, const MeshTopology& t
   return changed;
 }
 
-// Whether `surface` explains every point of `data` to within `distance` and every sample normal
-// to within `angle` (radians): on an exact tessellation a merge must not hide one stray facet in an
-// RMS over many.
+// Whether `surface` explains every point of `data` to within `distance` and every facet normal (the
+// samples are facets: centroid, normal, area) to within `angle` (radians) plus what the facet's
+// chord allows: a facet whose corners lie on a surface of curvature k sags by about k w² / 2 at its
+// centroid and turns by about k w across its width w, so by at most 4 sag / w from the surface
+// normal there (up to half the largest turn a tessellation has, below). On an exact tessellation a
+// merge must not hide one stray facet in an RMS over many.
 bool explains_every_point(const Surface& surface, const PatchPoints& data, double distance, double angle) {
   for (Eigen::Index i = 0; i < data.points.rows(); ++i)
     if (std::abs(signed_distance(surface, data.points.row(i).transpose())) > distance) return false;
-  const double cos_angle = std::cos(angle);
   for (Eigen::Index i = 0; i < data.sample_points.rows(); ++i) {
     if (!(data.sample_weights[i] > 0.0)) continue;
-    const Eigen::Vector3d n = surface_normal(surface, data.sample_points.row(i).transpose());
-    if (std::abs(n.dot(data.sample_normals.row(i).transpose())) < cos_angle) return false;
+    const Eigen::Vector3d centroid = data.sample_points.row(i).transpose();
+    const double sag = std::abs(signed_distance(surface, centroid));
+    const double allowed = angle + std::min(4.0 * sag / std::sqrt(data.sample_weights[i]), 0.5 * kLargestFacetTurn);
+    const Eigen::Vector3d n = surface_normal(surface, centroid);
+    if (std::abs(n.dot(data.sample_normals.row(i).transpose())) < std::cos(std::min(allowed, 0.5 * M_PI))) return false;
   }
   return true;
+}
+
+// The sharpest turn between the facets of each pair of adjacent patches, in radians, keyed (a, b)
+// with a < b.
+std::map<std::pair<int, int>, double> boundary_turns(const TriangleMesh& mesh, const MeshTopology& topology,
+                                                     const std::vector<int>& labels) {
+  auto normal_of = [&](int f) {
+    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+    return Eigen::Vector3d((b - a).cross(c - a).normalized());
+  };
+  std::map<std::pair<int, int>, double> turns;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(f, c);
+      if (g < f || labels[f] < 0 || labels[g] < 0 || labels[f] == labels[g]) continue;
+      const double turn = std::acos(std::clamp(normal_of(f).dot(normal_of(g)), -1.0, 1.0));
+      double& t = turns[{std::min(labels[f], labels[g]), std::max(labels[f], labels[g])}];
+      t = std::max(t, std::isfinite(turn) ? turn : M_PI);
+    }
+  return turns;
+}
+
+// Degrees of freedom of a surface type.
+int parameter_count(SurfaceType type) {
+  switch (type) {
+    case SurfaceType::Plane: return 3;
+    case SurfaceType::Sphere: return 4;
+    case SurfaceType::Cylinder: return 5;
+    case SurfaceType::Cone: return 6;
+    case SurfaceType::Torus: return 7;
+    default: return std::numeric_limits<int>::max() / 2;
+  }
+}
+
+// Distinct points of `data` (pieces share their rim vertices).
+int distinct_points(const PatchPoints& data) {
+  std::set<std::array<double, 3>> seen;
+  for (Eigen::Index i = 0; i < data.points.rows(); ++i) seen.insert({data.points(i, 0), data.points(i, 1), data.points(i, 2)});
+  return static_cast<int>(seen.size());
+}
+
+// On an exact tessellation, a small curved face (a chamfer cone cut by a hexagon) may fall apart
+// into single facets of which no pair determines its surface. From each small piece, its nearest
+// small neighbours are gathered until they have three distinct vertices more than a surface type
+// has parameters; the simplest type that explains every vertex and facet normal of them exactly
+// then grows over the adjacent small pieces it explains, and all of them merge into one patch.
+// Returns whether any piece merged.
+bool merge_fragments(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<PatchPoints>& points,
+                     const FeatureOptions& options, double exact_distance, std::vector<Feature>& features,
+                     std::vector<int>& labels) {
+  const int num = static_cast<int>(points.size());
+  std::vector<char> small(num, 0);
+  for (int p = 0; p < num; ++p) small[p] = points[p].points.rows() > 0 && points[p].points.rows() < kInteriorPoints;
+  // Small pieces meeting without a crease (in order of id).
+  std::vector<std::vector<int>> neighbours(num);
+  for (const auto& [pair, turn] : boundary_turns(mesh, topology, labels))
+    if (small[pair.first] && small[pair.second] && turn <= kLargestFacetTurn) {
+      neighbours[pair.first].push_back(pair.second);
+      neighbours[pair.second].push_back(pair.first);
+    }
+  for (std::vector<int>& n : neighbours) std::sort(n.begin(), n.end());
+  const double angle = options.normal_floor_degrees * M_PI / 180.0;
+  std::vector<int> into(num);
+  for (int p = 0; p < num; ++p) into[p] = p;
+  std::vector<char> taken(num, 0), in_group(num, 0);
+  bool any = false;
+  for (int seed = 0; seed < num; ++seed) {
+    if (!small[seed] || taken[seed] || neighbours[seed].empty()) continue;
+    for (SurfaceType type : kTypesByPreference) {
+      // The seed's nearest untaken small neighbours, breadth first, until the type is determined.
+      std::vector<int> group{seed};
+      in_group[seed] = 1;
+      PatchPoints data = points[seed];
+      for (size_t head = 0; head < group.size() && distinct_points(data) < parameter_count(type) + 3; ++head)
+        for (int q : neighbours[group[head]])
+          if (!taken[q] && !in_group[q] && distinct_points(data) < parameter_count(type) + 3) {
+            in_group[q] = 1;
+            group.push_back(q);
+            data = concatenate(data, points[q]);
+          }
+      SurfaceFit fit;
+      bool exact = distinct_points(data) >= parameter_count(type) + 3;
+      if (exact) {
+        fit = fit_surface(type, data, options.fit);
+        exact = fit.valid && explains_every_point(fit.surface, data, exact_distance, angle);
+      }
+      if (exact) {  // grow over the small pieces the surface explains
+        for (size_t head = 0; head < group.size(); ++head)
+          for (int q : neighbours[group[head]])
+            if (!taken[q] && !in_group[q] && explains_every_point(fit.surface, points[q], exact_distance, angle)) {
+              in_group[q] = 1;
+              group.push_back(q);
+            }
+      }
+      for (int q : group) in_group[q] = 0;
+      if (!exact) continue;
+      const int id = features[seed].id;
+      for (size_t i = 1; i < group.size(); ++i) data = concatenate(data, points[group[i]]);
+      const SurfaceFit refit = fit_surface(type, data, options.fit, &fit.surface);
+      set_fit(features[seed], refit.valid && refit.rms <= fit.rms + exact_distance ? refit : fit);
+      features[seed].id = id;
+      for (int q : group) {
+        into[q] = seed;
+        taken[q] = 1;
+      }
+      any = true;
+      break;
+    }
+  }
+  for (int& l : labels)
+    if (l >= 0) l = into[l];
+  return any;
+}
+
+// On an exact tessellation, the small pieces that no surface explains exactly once merging has
+// finished join the large neighbour they meet without a crease whose surface comes nearest to their
+// vertices, if within `tolerance`: the facets along the trimmed rim of a torus band that the
+// tessellation cut with a single chord across (its other facets lie on a cone). Returns whether any
+// piece joined.
+bool absorb_fragments(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<PatchPoints>& points,
+                      double tolerance, const std::vector<Feature>& features, std::vector<int>& labels) {
+  const int num = static_cast<int>(points.size());
+  std::vector<int> into(num, kNone);
+  std::vector<double> nearest(num, tolerance);
+  for (const auto& [pair, turn] : boundary_turns(mesh, topology, labels)) {
+    if (turn > kLargestFacetTurn) continue;
+    for (const auto& [piece, large] : {pair, std::make_pair(pair.second, pair.first)}) {
+      if (points[piece].points.rows() >= kInteriorPoints || points[large].points.rows() < kInteriorPoints ||
+          features[large].type == SurfaceType::Freeform)
+        continue;
+      double worst = 0.0;
+      for (Eigen::Index i = 0; i < points[piece].points.rows(); ++i)
+        worst = std::max(worst, std::abs(signed_distance(features[large].surface, points[piece].points.row(i).transpose())));
+      if (worst < nearest[piece]) {
+        nearest[piece] = worst;
+        into[piece] = large;
+      }
+    }
+  }
+  bool any = false;
+  for (int& l : labels)
+    if (l >= 0 && into[l] != kNone) {
+      l = into[l];
+      any = true;
+    }
+  return any;
 }
 
 // Merges adjacent patches whose union one surface fits as well as each part alone: a fillet or a
@@ -254,15 +410,9 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
                    const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
                    const FeatureOptions& options, double tolerance, bool exact, double exact_distance,
                    std::vector<Feature>& features, std::vector<int>& labels, std::set<std::pair<int, int>>& rejected, const ProgressSpan& progress) {
-  std::vector<std::pair<int, int>> pairs;
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int g = topology.face_neighbor(f, c);
-      if (g < f || labels[f] < 0 || labels[g] < 0 || labels[f] == labels[g]) continue;
-      pairs.emplace_back(std::min(labels[f], labels[g]), std::max(labels[f], labels[g]));
-    }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  std::vector<std::pair<int, int>> pairs;  // adjacent, and on an exact tessellation not across a crease
+  for (const auto& [pair, turn] : boundary_turns(mesh, topology, labels))
+    if (!exact || turn <= kLargestFacetTurn) pairs.push_back(pair);
 
   struct Candidate {
     double cost;
@@ -287,9 +437,8 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     auto accepted = [&](const Feature& u) {
       if (u.type == SurfaceType::Freeform || u.rms > limit || u.normal_rms > normal_limit) return false;
       if (!exact) return true;
-      // The facet normals of a coarse curved face deviate from the surface's at their centroids by
-      // a little of the facet angle: as much as in the parts is allowed, plus the floor.
-      const double angle = 3.0 * std::max({u.normal_spread, fa.normal_spread, fb.normal_spread}) + normal_floor;
+      // As much normal spread as the parts have is allowed, plus the floor (and the facets' chords).
+      const double angle = 3.0 * std::max(fa.normal_spread, fb.normal_spread) + normal_floor;
       return explains_every_point(u.surface, pa, exact_distance, angle) &&
              explains_every_point(u.surface, pb, exact_distance, angle);
     };
@@ -446,6 +595,139 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
       first = false;
     }
     for (int f : component) labels[f] = id;
+  }
+  return next_id;
+}
+
+// What a fit sees of a set of faces: all their vertices (a third of the area of the faces around
+// each) and the faces themselves.
+PatchPoints face_points(const TriangleMesh& mesh, const std::vector<int>& faces, std::vector<int>& slot) {
+  PatchPoints pp;
+  const Eigen::Index count = static_cast<Eigen::Index>(faces.size());
+  pp.sample_points.resize(count, 3);
+  pp.sample_normals.resize(count, 3);
+  pp.sample_weights.resize(count);
+  std::vector<int> vertices;
+  std::vector<double> vertex_area;
+  for (Eigen::Index i = 0; i < count; ++i) {
+    const int f = faces[i];
+    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    const double area = 0.5 * n.norm();
+    pp.sample_points.row(i) = (a + b + c) / 3.0;
+    pp.sample_normals.row(i) = area > 0.0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
+    pp.sample_weights[i] = area;
+    for (int k = 0; k < 3; ++k) {
+      const int v = mesh.F(f, k);
+      if (slot[v] < 0) {
+        slot[v] = static_cast<int>(vertices.size());
+        vertices.push_back(v);
+        vertex_area.push_back(0.0);
+      }
+      vertex_area[slot[v]] += area / 3.0;
+    }
+  }
+  pp.points.resize(static_cast<Eigen::Index>(vertices.size()), 3);
+  pp.weights.resize(pp.points.rows());
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    pp.points.row(static_cast<Eigen::Index>(i)) = mesh.V.row(vertices[i]);
+    pp.weights[static_cast<Eigen::Index>(i)] = vertex_area[i];
+    slot[vertices[i]] = -1;
+  }
+  return pp;
+}
+
+// Splits a noisy patch that no single surface fits into regions that one surface each fits: a chain
+// of blends of one radius (cylinder, torus, cylinder) has one mean curvature, so the histogram
+// cannot tell its members apart. From the face deepest inside the patch, a disc of faces is
+// identified; when one surface fits it to within `fits_below` RMS, the region grows over the faces
+// whose vertices lie within 3 σ of the surface and whose normals lie within 3 σ_n of its normals (σ
+// the larger of the mesh's noise and the fit's spread), refitted as it doubles. Regions of at least
+// `min_region_faces` faces get new ids from `next_id` on; the faces no region took stay with the
+// patch, and the reassignment that follows moves its rim faces to the surfaces that explain them.
+int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
+                        double normal_noise, double fits_below, int min_region_faces,
+                        const std::function<Feature(const PatchPoints&)>& identify_points, const FitOptions& fit_options,
+                        std::vector<int>& labels, int next_id, const ProgressSpan& progress) {
+  // Depth of every face of the patch: edge steps from its rim (multi-source breadth-first search).
+  std::vector<int> depth(mesh.num_faces(), -1), queue;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (labels[f] != patch) continue;
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(f, c);
+      if (g < 0 || labels[g] != patch) {
+        depth[f] = 0;
+        queue.push_back(f);
+        break;
+      }
+    }
+  }
+  for (size_t head = 0; head < queue.size(); ++head)
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(queue[head], c);
+      if (g >= 0 && labels[g] == patch && depth[g] < 0) {
+        depth[g] = depth[queue[head]] + 1;
+        queue.push_back(g);
+      }
+    }
+  std::vector<int> seeds = queue;  // deepest first, ties by face index
+  std::stable_sort(seeds.begin(), seeds.end(), [&](int x, int y) { return depth[x] != depth[y] ? depth[x] > depth[y] : x < y; });
+
+  const int disc_faces = 2 * kInteriorPoints;
+  std::vector<char> tried(mesh.num_faces(), 0), in_region(mesh.num_faces(), 0);
+  std::vector<int> slot(mesh.num_vertices(), -1);
+  long long visited = 0;
+  for (int seed : seeds) {
+    if (labels[seed] != patch || tried[seed]) continue;
+    // The disc: the nearest faces of the patch that no region took.
+    std::vector<int> region{seed};
+    in_region[seed] = 1;
+    for (size_t head = 0; head < region.size() && static_cast<int>(region.size()) < disc_faces; ++head)
+      for (int c = 0; c < 3 && static_cast<int>(region.size()) < disc_faces; ++c) {
+        const int g = topology.face_neighbor(region[head], c);
+        if (g >= 0 && labels[g] == patch && !in_region[g]) {
+          in_region[g] = 1;
+          region.push_back(g);
+        }
+      }
+    for (int f : region) tried[f] = 1;
+    Feature feature;
+    if (static_cast<int>(region.size()) == disc_faces) feature = identify_points(face_points(mesh, region, slot));
+    if (static_cast<int>(region.size()) < disc_faces || feature.type == SurfaceType::Freeform || feature.rms > fits_below) {
+      for (int f : region) in_region[f] = 0;
+      continue;
+    }
+    size_t fitted = region.size();
+    auto explains = [&](int g) {
+      const double distance = 3.0 * std::max(noise, feature.spread);
+      const double angle = 3.0 * std::max(normal_noise, feature.normal_spread);
+      const Eigen::Vector3d a = mesh.V.row(mesh.F(g, 0)), b = mesh.V.row(mesh.F(g, 1)), c = mesh.V.row(mesh.F(g, 2));
+      for (const Eigen::Vector3d* v : {&a, &b, &c})
+        if (std::abs(signed_distance(feature.surface, *v)) > distance) return false;
+      const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+      return std::abs(n.dot(surface_normal(feature.surface, (a + b + c) / 3.0))) >= std::cos(std::min(angle, 0.5 * M_PI));
+    };
+    // The disc's faces that the surface does not explain leave it; the rest grows.
+    for (int f : region) in_region[f] = explains(f);
+    region.erase(std::remove_if(region.begin(), region.end(), [&](int f) { return !in_region[f]; }), region.end());
+    for (size_t head = 0; head < region.size(); ++head) {
+      progress.poll(++visited, 1 << 12);
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(region[head], c);
+        if (g < 0 || labels[g] != patch || in_region[g] || !explains(g)) continue;
+        in_region[g] = 1;
+        region.push_back(g);
+        if (region.size() >= 2 * fitted) {  // refit as the region doubles
+          const SurfaceFit fit = fit_surface(feature.type, face_points(mesh, region, slot), fit_options, &feature.surface);
+          if (fit.valid) set_fit(feature, fit);
+          fitted = region.size();
+        }
+      }
+    }
+    for (int f : region) in_region[f] = 0;
+    if (static_cast<int>(region.size()) < min_region_faces) continue;
+    for (int f : region) labels[f] = next_id;
+    ++next_id;
   }
   return next_id;
 }
@@ -698,7 +980,28 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
           if (layer.labels[f] >= num_patches) curvature[layer.labels[f]] = patch_curvature[labels[f]];
         split.step(0.5);
         points = patch_points(mesh, layer.labels, next_id);
-        identify_all(points, which, split.sub(0.6, 1.0));
+        identify_all(points, which, split.sub(0.6, 0.8));
+      }
+      // On a noisy mesh, a large piece that still no surface fits is split by growing surfaces.
+      if (!exact_mesh) {
+        const int pieces = next_id;
+        const std::vector<int> count = triangle_counts();
+        std::vector<char> which(pieces, 0);
+        for (int p = 0; p < pieces; ++p) {
+                if (count[p] < 4 * kInteriorPoints || !badly_fitting(layer.features[p])) continue;
+          const int first_new = next_id;
+          next_id = split_into_surfaces(
+              mesh, topology, p, noise, normal_noise, split_above, 2 * kInteriorPoints,
+              [&](const PatchPoints& pp) { return identify_points(pp, curvature[p]); }, options.fit, layer.labels,
+              next_id, split.sub(0.8, 0.9));
+          curvature.resize(next_id, curvature[p]);
+          which.resize(next_id, 1);
+          which[p] = next_id > first_new;
+        }
+        if (next_id > pieces) {
+          points = patch_points(mesh, layer.labels, next_id);
+          identify_all(points, which, split.sub(0.9, 1.0));
+        }
       }
     }
   }
@@ -714,13 +1017,19 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   double merged_so_far = 0.0;
   // Every merge removes a patch, so on an exact tessellation merging runs until nothing fits together.
   const int merge_passes = exact_mesh ? patches : options.merge_passes;
+  int fragment_rounds = 3;
   for (int pass = 0; pass < merge_passes; ++pass) {
     const double share = (1.0 - merged_so_far) / 3.0;
     const ProgressSpan this_pass = merge.sub(merged_so_far, merged_so_far + share);
     merged_so_far += share;
-    if (!merge_patches(mesh, topology, points, identify_points, options, layer.distance_tolerance, exact_mesh,
-                       exact_distance, layer.features, layer.labels, rejected, this_pass.sub(0.0, 0.9)))
-      break;
+    bool merged = merge_patches(mesh, topology, points, identify_points, options, layer.distance_tolerance, exact_mesh,
+                                exact_distance, layer.features, layer.labels, rejected, this_pass.sub(0.0, 0.9));
+    // When no pair merges any more, the small pieces left may still make surfaces together (tried
+    // a few times: each time merging may grow the surfaces next to them).
+    if (!merged && exact_mesh && fragment_rounds-- > 0)
+      merged = merge_fragments(mesh, topology, points, options, exact_distance, layer.features, layer.labels) ||
+               absorb_fragments(mesh, topology, points, layer.distance_tolerance, layer.features, layer.labels);
+    if (!merged) break;
     this_pass.step(0.9);
     points = patch_points(mesh, layer.labels, patches);
   }
