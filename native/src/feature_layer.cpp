@@ -57,13 +57,57 @@ std::vector<int> vertex_labels(const TriangleMesh& mesh, const std::vector<int>&
 // the area of that patch's faces around it; fits use the patch's interior vertices when there are
 // enough of them (on a scan the rim lies on the rounded-off edge), all of them otherwise (a coarse
 // CAD face may have no interior vertex, and its rim lies on the surface).
-// What the fits see of every patch: its vertices (a third of the area of the patch's faces around
-// each) and its faces (centroid, normal, area). Fits use the patch's interior vertices when there
-// are enough of them (on a scan the rim lies on the rounded-off edge), all of them otherwise (a
-// coarse CAD face may have no interior vertex, and its rim lies on the surface).
+// What a fit sees of a set of faces: their vertices (a third of the area of the faces around each)
+// and the faces themselves (centroid, normal, area). When at least kInteriorPoints of the vertices
+// are `interior`, only those are kept: on a scan the rim of a patch lies on the rounded-off edge,
+// while a coarse CAD face may have no interior vertex and its rim lies on the surface. `slot` is a
+// per-vertex scratch array of -1, left as it was found.
+template <typename Interior>
+PatchPoints face_points(const TriangleMesh& mesh, const int* faces, int count, std::vector<int>& slot,
+                        const Interior& interior) {
+  PatchPoints pp;
+  pp.sample_points.resize(count, 3);
+  pp.sample_normals.resize(count, 3);
+  pp.sample_weights.resize(count);
+  std::vector<int> vertices;
+  std::vector<double> vertex_area;
+  for (int i = 0; i < count; ++i) {
+    const int f = faces[i];
+    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    const double area = 0.5 * n.norm();
+    pp.sample_points.row(i) = (a + b + c) / 3.0;
+    pp.sample_normals.row(i) = area > 0.0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
+    pp.sample_weights[i] = area;
+    for (int k = 0; k < 3; ++k) {
+      const int v = mesh.F(f, k);
+      if (slot[v] < 0) {
+        slot[v] = static_cast<int>(vertices.size());
+        vertices.push_back(v);
+        vertex_area.push_back(0.0);
+      }
+      vertex_area[slot[v]] += area / 3.0;
+    }
+  }
+  const auto interior_count = std::count_if(vertices.begin(), vertices.end(), interior);
+  const bool interior_only = interior_count >= kInteriorPoints;
+  pp.points.resize(interior_only ? interior_count : static_cast<Eigen::Index>(vertices.size()), 3);
+  pp.weights.resize(pp.points.rows());
+  Eigen::Index k = 0;
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    const int v = vertices[i];
+    slot[v] = -1;
+    if (interior_only && !interior(v)) continue;
+    pp.points.row(k) = mesh.V.row(v);
+    pp.weights[k] = vertex_area[i];
+    ++k;
+  }
+  return pp;
+}
+
+// What the fits see of every patch (face_points, interior: the vertices only the patch touches).
 std::vector<PatchPoints> patch_points(const TriangleMesh& mesh, const std::vector<int>& labels, int num_patches) {
-  // Faces bucketed by patch (counting sort), then each patch's vertices gathered through a
-  // per-vertex slot that is reset after the patch.
+  // Faces bucketed by patch (counting sort).
   std::vector<int> offset(num_patches + 1, 0);
   for (int l : labels)
     if (l >= 0) ++offset[l + 1];
@@ -77,48 +121,9 @@ std::vector<PatchPoints> patch_points(const TriangleMesh& mesh, const std::vecto
   const std::vector<int> shared = vertex_labels(mesh, labels);
   std::vector<int> slot(mesh.num_vertices(), -1);
   std::vector<PatchPoints> out(num_patches);
-  std::vector<int> vertices;
-  std::vector<double> vertex_area;
-  for (int p = 0; p < num_patches; ++p) {
-    PatchPoints& pp = out[p];
-    const int count = offset[p + 1] - offset[p];
-    pp.sample_points.resize(count, 3);
-    pp.sample_normals.resize(count, 3);
-    pp.sample_weights.resize(count);
-    vertices.clear();
-    vertex_area.clear();
-    for (int i = 0; i < count; ++i) {
-      const int f = faces[offset[p] + i];
-      const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-      const Eigen::Vector3d n = (b - a).cross(c - a);
-      const double area = 0.5 * n.norm();
-      pp.sample_points.row(i) = (a + b + c) / 3.0;
-      pp.sample_normals.row(i) = area > 0.0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
-      pp.sample_weights[i] = area;
-      for (int k = 0; k < 3; ++k) {
-        const int v = mesh.F(f, k);
-        if (slot[v] < 0) {
-          slot[v] = static_cast<int>(vertices.size());
-          vertices.push_back(v);
-          vertex_area.push_back(0.0);
-        }
-        vertex_area[slot[v]] += area / 3.0;
-      }
-    }
-    const auto interior_count = std::count_if(vertices.begin(), vertices.end(), [&](int v) { return shared[v] == p; });
-    const bool interior_only = interior_count >= kInteriorPoints;
-    pp.points.resize(interior_only ? interior_count : static_cast<Eigen::Index>(vertices.size()), 3);
-    pp.weights.resize(pp.points.rows());
-    Eigen::Index k = 0;
-    for (size_t i = 0; i < vertices.size(); ++i) {
-      const int v = vertices[i];
-      slot[v] = -1;
-      if (interior_only && shared[v] != p) continue;
-      pp.points.row(k) = mesh.V.row(v);
-      pp.weights[k] = vertex_area[i];
-      ++k;
-    }
-  }
+  for (int p = 0; p < num_patches; ++p)
+    out[p] = face_points(mesh, faces.data() + offset[p], offset[p + 1] - offset[p], slot,
+                         [&](int v) { return shared[v] == p; });
   return out;
 }
 
@@ -272,17 +277,6 @@ std::map<std::pair<int, int>, double> boundary_turns(const TriangleMesh& mesh, c
   return turns;
 }
 
-// Degrees of freedom of a surface type.
-int parameter_count(SurfaceType type) {
-  switch (type) {
-    case SurfaceType::Plane: return 3;
-    case SurfaceType::Sphere: return 4;
-    case SurfaceType::Cylinder: return 5;
-    case SurfaceType::Cone: return 6;
-    case SurfaceType::Torus: return 7;
-    default: return std::numeric_limits<int>::max() / 2;
-  }
-}
 
 // Distinct points of `data` (pieces share their rim vertices).
 int distinct_points(const PatchPoints& data) {
@@ -599,44 +593,6 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
   return next_id;
 }
 
-// What a fit sees of a set of faces: all their vertices (a third of the area of the faces around
-// each) and the faces themselves.
-PatchPoints face_points(const TriangleMesh& mesh, const std::vector<int>& faces, std::vector<int>& slot) {
-  PatchPoints pp;
-  const Eigen::Index count = static_cast<Eigen::Index>(faces.size());
-  pp.sample_points.resize(count, 3);
-  pp.sample_normals.resize(count, 3);
-  pp.sample_weights.resize(count);
-  std::vector<int> vertices;
-  std::vector<double> vertex_area;
-  for (Eigen::Index i = 0; i < count; ++i) {
-    const int f = faces[i];
-    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-    const Eigen::Vector3d n = (b - a).cross(c - a);
-    const double area = 0.5 * n.norm();
-    pp.sample_points.row(i) = (a + b + c) / 3.0;
-    pp.sample_normals.row(i) = area > 0.0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
-    pp.sample_weights[i] = area;
-    for (int k = 0; k < 3; ++k) {
-      const int v = mesh.F(f, k);
-      if (slot[v] < 0) {
-        slot[v] = static_cast<int>(vertices.size());
-        vertices.push_back(v);
-        vertex_area.push_back(0.0);
-      }
-      vertex_area[slot[v]] += area / 3.0;
-    }
-  }
-  pp.points.resize(static_cast<Eigen::Index>(vertices.size()), 3);
-  pp.weights.resize(pp.points.rows());
-  for (size_t i = 0; i < vertices.size(); ++i) {
-    pp.points.row(static_cast<Eigen::Index>(i)) = mesh.V.row(vertices[i]);
-    pp.weights[static_cast<Eigen::Index>(i)] = vertex_area[i];
-    slot[vertices[i]] = -1;
-  }
-  return pp;
-}
-
 // Splits a noisy patch that no single surface fits into regions that one surface each fits: a chain
 // of blends of one radius (cylinder, torus, cylinder) has one mean curvature, so the histogram
 // cannot tell its members apart. From the face deepest inside the patch, a disc of faces is
@@ -676,6 +632,9 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
   const int disc_faces = 2 * kInteriorPoints;
   std::vector<char> tried(mesh.num_faces(), 0), in_region(mesh.num_faces(), 0);
   std::vector<int> slot(mesh.num_vertices(), -1);
+  auto all_points = [&](const std::vector<int>& faces) {
+    return face_points(mesh, faces.data(), static_cast<int>(faces.size()), slot, [](int) { return false; });
+  };
   long long visited = 0;
   for (int seed : seeds) {
     if (labels[seed] != patch || tried[seed]) continue;
@@ -692,7 +651,7 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
       }
     for (int f : region) tried[f] = 1;
     Feature feature;
-    if (static_cast<int>(region.size()) == disc_faces) feature = identify_points(face_points(mesh, region, slot));
+    if (static_cast<int>(region.size()) == disc_faces) feature = identify_points(all_points(region));
     if (static_cast<int>(region.size()) < disc_faces || feature.type == SurfaceType::Freeform || feature.rms > fits_below) {
       for (int f : region) in_region[f] = 0;
       continue;
@@ -718,7 +677,7 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
         in_region[g] = 1;
         region.push_back(g);
         if (region.size() >= 2 * fitted) {  // refit as the region doubles
-          const SurfaceFit fit = fit_surface(feature.type, face_points(mesh, region, slot), fit_options, &feature.surface);
+          const SurfaceFit fit = fit_surface(feature.type, all_points(region), fit_options, &feature.surface);
           if (fit.valid) set_fit(feature, fit);
           fitted = region.size();
         }

@@ -51,6 +51,18 @@ const char* surface_type_name(SurfaceType type) {
   return "freeform";
 }
 
+int parameter_count(SurfaceType type) {
+  switch (type) {
+    case SurfaceType::Plane: return 3;
+    case SurfaceType::Sphere: return 4;
+    case SurfaceType::Cylinder: return 5;
+    case SurfaceType::Cone: return 6;
+    case SurfaceType::Torus: return 7;
+    case SurfaceType::Freeform: return 0;
+  }
+  return 0;
+}
+
 void orthonormal_frame(const Eigen::Vector3d& axis, Eigen::Vector3d& e1, Eigen::Vector3d& e2) {
   // Cross with the coordinate axis least aligned with `axis`: never nearly parallel.
   Eigen::Index smallest;

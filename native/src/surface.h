@@ -12,6 +12,9 @@ enum class SurfaceType { Plane, Cylinder, Cone, Sphere, Torus, Freeform };
 // Name used in reports: "plane", "cylinder", "cone", "sphere", "torus", "freeform".
 const char* surface_type_name(SurfaceType type);
 
+// Degrees of freedom of a surface of the type (0 for freeform).
+int parameter_count(SurfaceType type);
+
 // One analytic surface. Which members are used depends on the type:
 //   plane     point on the plane, axis = unit normal
 //   cylinder  point on the axis, axis = unit direction, radius

@@ -13,18 +13,6 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-int parameter_count(SurfaceType type) {
-  switch (type) {
-    case SurfaceType::Plane: return 3;
-    case SurfaceType::Sphere: return 4;
-    case SurfaceType::Cylinder: return 5;
-    case SurfaceType::Cone: return 6;
-    case SurfaceType::Torus: return 7;
-    case SurfaceType::Freeform: return 0;
-  }
-  return 0;
-}
-
 // The surface moved by a small parameter step `d` (parameter_count entries): the axis tilts in
 // its own frame, so every step is a local, minimal parametrisation.
 Surface perturbed(const Surface& s, const double* d) {
