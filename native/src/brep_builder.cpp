@@ -817,9 +817,10 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     TopoDS_Solid solid = TopoDS::Solid(make_solid.SolidFromShell(fixed_shell));
     shape = solid;
   }
-  if (options.unify) {
+  if (options.unify && closed) {
     // Merging is a refinement: where OCCT's merging fails (it faults on some edges), the faces
-    // stay as they are.
+    // stay as they are. Only on a closed solid: on an open shell of many faces OCCT 7.6's merging
+    // ran for minutes (a fragmented CAD torus blend).
     try {
       OCC_CATCH_SIGNALS
       ShapeUpgrade_UnifySameDomain unify(shape, Standard_True, Standard_True, Standard_False);
