@@ -12,6 +12,7 @@
 #include <GProp_GProps.hxx>
 #include <GeomAPI_IntSS.hxx>
 #include <GeomAPI_PointsToBSpline.hxx>
+#include <GeomAPI_ExtremaCurveCurve.hxx>
 #include <GeomAPI_ProjectPointOnCurve.hxx>
 #include <Geom_BSplineCurve.hxx>
 #include <Geom_Circle.hxx>
@@ -638,6 +639,23 @@ void BrepBuilder::make_edges(BrepResult& result) {
       if (chain.closed) {
         GeomAPI_ProjectPointOnCurve start(to_pnt(points.front()), curve);
         p0 = start.NbPoints() ? to_vec(start.NearestPoint()) : points.front();
+        // A closed edge starts where it crosses the seam of the periodic face beside it: a full
+        // band (a cylinder between two circles) is then bounded by circle, seam, circle, seam,
+        // which healing does not have to split with gap-filling degenerate edges. (Between two
+        // periodic faces, whose seams differ, the mesh decides.)
+        auto periodic = [&](int region) {
+          return region >= 0 && !region_surfaces_[region].IsNull() && region_surfaces_[region]->IsUPeriodic();
+        };
+        if (periodic(chain.left) != periodic(chain.right)) {
+          const int region = periodic(chain.left) ? chain.left : chain.right;
+          const Handle(Geom_Curve) seam = region_surfaces_[region]->UIso(0.0);
+          GeomAPI_ExtremaCurveCurve crossing(curve, seam);
+          if (crossing.NbExtrema() > 0 && crossing.LowerDistance() <= 10 * tol_) {
+            gp_Pnt on_curve, on_seam;
+            crossing.NearestPoints(on_curve, on_seam);
+            p0 = to_vec(on_curve);
+          }
+        }
         builder.MakeVertex(v0, to_pnt(p0), Precision::Confusion());
         v1 = v0;
         p1 = p0;
@@ -656,9 +674,10 @@ void BrepBuilder::make_edges(BrepResult& result) {
           const double period = curve->Period();
           const auto wrap = [&](double u) { return u - period * std::floor(u / period); };
           u0 = parameter(p0);
-          const double up = wrap(parameter(probe) - u0);
           const double span = loop ? period : wrap(parameter(p1) - u0);
-          reverse = loop ? up > 0.5 * period : up > span;
+          // A loop runs the way its mesh vertices do (from its first one, wherever the edge starts).
+          reverse = loop ? wrap(parameter(probe) - parameter(points.front())) > 0.5 * period
+                         : wrap(parameter(probe) - u0) > span;
           u1 = u0 + (span > 0 ? span : period);
         } else if (loop) {
           u0 = curve->FirstParameter();
