@@ -4,10 +4,10 @@ Idealize_Segment makes a coloured, undoable copy of the selected mesh.
 Runs the real FreeCAD GUI under a virtual X server (xvfb-run), with a driver script that
 reports back through a JSON file. Skipped when xvfb-run or freecad is missing.
 """
+import importlib.util
 import json
 import os
 import shutil
-import subprocess
 
 import pytest
 
@@ -15,15 +15,12 @@ REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # A remeshed CAD part from the project's shared test data (never copied into the repository).
 SHARED_MESH = os.path.join(os.path.dirname(REPO), "shared", "data", "mesh", "joint.stl")
 
-# Runs inside FreeCAD. CONFIG is filled in by the test. Always ends with os._exit(): the GUI
-# would otherwise keep running (and os._exit also keeps FreeCAD from saving its preferences).
-DRIVER = r'''
-import json, os, traceback
-import FreeCAD as App
-import FreeCADGui as Gui
+_SPEC = importlib.util.spec_from_file_location("gui_driver", os.path.join(REPO, "bench", "gui_driver.py"))
+gui_driver = importlib.util.module_from_spec(_SPEC)
+_SPEC.loader.exec_module(gui_driver)
 
-CONFIG = json.loads(__CONFIG__)
-result = {}
+# The script run() in FreeCAD's GUI (bench/gui_driver.py); CONFIG is filled in by the test.
+DRIVER = r'''
 
 
 def ensure_link():
@@ -383,14 +380,6 @@ def run():
     result["objects_after_error"] = [o.Label for o in doc.Objects]
     result["undo_added_by_error"] = len(doc.UndoNames) - undo_count
 
-
-try:
-    run()
-except Exception:
-    result["exception"] = traceback.format_exc()
-with open(CONFIG["result"], "w") as f:
-    json.dump(result, f, indent=1)
-os._exit(0)
 '''
 
 
@@ -402,19 +391,10 @@ def run_driver(tmp_path, attempt):
               "screenshot_panel": str(tmp_path / "panel-gui.png"), "fcstd": str(tmp_path / "layer.FCStd"),
               "shared_mesh": SHARED_MESH,
               "screenshot_solid": str(tmp_path / "solid-gui.png"), "step": str(tmp_path / "part.step")}
-    script = tmp_path / ("driver%d.py" % attempt)
-    script.write_text(DRIVER.replace("__CONFIG__", repr(json.dumps(config))))
-    env = dict(os.environ, QTWEBENGINE_DISABLE_SANDBOX="1")
-    env.pop("QT_QPA_PLATFORM", None)  # must use the X server xvfb-run starts
-    proc = subprocess.run(["timeout", "240", "xvfb-run", "-a", "-s", "-screen 0 1280x1024x24",
-                           "freecad", str(script)],
-                          env=env, cwd=str(tmp_path), capture_output=True, text=True)
-    if not os.path.exists(config["result"]):
-        pytest.fail("FreeCAD wrote no result (exit code %d%s)\n%s\n%s" % (
-            proc.returncode, ", timed out" if proc.returncode == 124 else "",
-            proc.stdout[-3000:], proc.stderr[-3000:]))
-    with open(config["result"]) as f:
-        return json.load(f), config
+    try:
+        return gui_driver.run_in_freecad_gui(DRIVER, config, tmp_path / ("driver%d.py" % attempt), timeout=240), config
+    except gui_driver.DriverError as error:
+        pytest.fail(str(error))
 
 
 def test_segment_command_in_freecad_gui(tmp_path):

@@ -110,6 +110,13 @@ class _MeshCommand:
         return FreeCAD.ActiveDocument is not None and _selected_mesh() is not None
 
 
+class _LayerOrMeshCommand:
+    """A command on the one selected feature layer or mesh."""
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and (_selected_layer() is not None or _selected_mesh() is not None)
+
+
 class SegmentCommand(_MeshCommand):
     def GetResources(self):
         return {"Pixmap": icon("Idealize_Segment"),
@@ -143,15 +150,12 @@ class SegmentIdealizeCommand(_MeshCommand):
         _add_layer("Segment & Idealize", "Segment and idealize mesh", source, lambda obj: _hide_source(source, obj))
 
 
-class DeviationMapCommand:
+class DeviationMapCommand(_LayerOrMeshCommand):
     def GetResources(self):
         return {"Pixmap": icon("Idealize_DeviationMap"),
                 "MenuText": "Deviation map",
                 "ToolTip": "Colour the selected feature layer (or a new layer of the selected mesh) by the distance "
                            "of the mesh from the idealized surfaces, with a legend"}
-
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None and (_selected_layer() is not None or _selected_mesh() is not None)
 
     def Activated(self):
         layer = _selected_layer()
@@ -168,15 +172,12 @@ class DeviationMapCommand:
         _add_layer("Deviation map", "Deviation map", source, show)
 
 
-class MakeSolidCommand:
+class MakeSolidCommand(_LayerOrMeshCommand):
     def GetResources(self):
         return {"Pixmap": icon("Idealize_MakeSolid"),
                 "MenuText": "Make B-rep solid",
                 "ToolTip": "Fit a solid to the selected feature layer or mesh: one exact plane, cylinder, cone, "
                            "sphere or torus face per feature, plus a group of Part primitives"}
-
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None and (_selected_layer() is not None or _selected_mesh() is not None)
 
     def Activated(self):
         selected_layer = _selected_layer()

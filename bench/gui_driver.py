@@ -1,0 +1,54 @@
+"""Running a script in the real FreeCAD GUI under a virtual X server (xvfb-run), for the GUI test
+(tests/test_gui.py) and the workbench benchmark (bench/run_gui.py).
+
+The script body defines run(), which fills the dict `result`; it sees CONFIG (the config dict
+given here, as JSON), json, os, traceback, App (FreeCAD) and Gui (FreeCADGui). Whatever run()
+raises is reported as result["exception"]. The script always ends with os._exit(): the GUI would
+otherwise keep running (and os._exit also keeps FreeCAD from saving its preferences).
+"""
+import json
+import os
+import subprocess
+from pathlib import Path
+
+HEADER = r'''
+import json, os, traceback
+import FreeCAD as App
+import FreeCADGui as Gui
+
+CONFIG = json.loads(__CONFIG__)
+result = {}
+'''
+
+FOOTER = r'''
+
+try:
+    run()
+except Exception:
+    result["exception"] = traceback.format_exc()
+with open(CONFIG["result"], "w") as f:
+    json.dump(result, f, indent=1)
+os._exit(0)
+'''
+
+
+class DriverError(RuntimeError):
+    """FreeCAD ended without writing its result."""
+
+
+def run_in_freecad_gui(body: str, config: dict, script: Path, timeout: int) -> dict:
+    """Writes HEADER + body + FOOTER to `script` and runs it in FreeCAD's GUI (in the script's
+    folder, at most `timeout` seconds); returns the result dict the script wrote to
+    config["result"]. Raises DriverError with FreeCAD's output when there is none."""
+    script = Path(script)
+    script.write_text(HEADER.replace("__CONFIG__", repr(json.dumps(config))) + body + FOOTER)
+    env = dict(os.environ, QTWEBENGINE_DISABLE_SANDBOX="1")
+    env.pop("QT_QPA_PLATFORM", None)  # must use the X server xvfb-run starts
+    proc = subprocess.run(["timeout", str(timeout), "xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", "freecad",
+                           str(script)], env=env, cwd=str(script.parent), capture_output=True, text=True)
+    result = Path(config["result"])
+    if not result.exists():
+        raise DriverError("FreeCAD wrote no result (exit code %d%s)\n%s\n%s" % (
+            proc.returncode, ", timed out" if proc.returncode == 124 else "", proc.stdout[-3000:],
+            proc.stderr[-3000:]))
+    return json.loads(result.read_text())
