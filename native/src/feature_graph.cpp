@@ -12,11 +12,6 @@ namespace {
 
 bool analytic(const Feature& f) { return f.type != SurfaceType::Freeform; }
 
-Eigen::Vector3d face_normal(const TriangleMesh& mesh, int f) {
-  const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-  return (b - a).cross(c - a).normalized();
-}
-
 // The normal of a feature's surface at p, turned to the side the mesh face there faces.
 Eigen::Vector3d oriented_normal(const Feature& feature, const Eigen::Vector3d& p, const Eigen::Vector3d& face) {
   if (!analytic(feature)) return face;

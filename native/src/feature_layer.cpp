@@ -174,20 +174,24 @@ Feature identify(const PatchPoints& pp, const PatchCurvature& curvature, const E
   return feature;
 }
 
-// How well a feature's surface explains face f: the largest of its vertices' distances and its
-// normal's angle, each in units of three times the fit's robust spread (3 σ) plus a floor. At most
-// 1 when the surface explains the face; infinite for a freeform feature.
+// How well `surface` explains face f: the largest of its vertices' distances in units of
+// `distance_unit` and of its normal's angle from the surface's at its centroid in units of
+// `angle_unit` (radians). At most 1 when the surface explains the face.
+double face_misfit(const TriangleMesh& mesh, int f, const Surface& surface, double distance_unit, double angle_unit) {
+  double worst = 0.0;
+  for (int k = 0; k < 3; ++k)
+    worst = std::max(worst, std::abs(signed_distance(surface, mesh.V.row(mesh.F(f, k)).transpose())) / distance_unit);
+  const Eigen::Vector3d centroid =
+      (mesh.V.row(mesh.F(f, 0)) + mesh.V.row(mesh.F(f, 1)) + mesh.V.row(mesh.F(f, 2))).transpose() / 3.0;
+  const double cosine = std::abs(face_normal(mesh, f).dot(surface_normal(surface, centroid)));
+  return std::max(worst, std::acos(std::min(cosine, 1.0)) / angle_unit);
+}
+
+// face_misfit of a feature's surface in units of three times the fit's robust spread (3 σ) plus a
+// floor; infinite for a freeform feature.
 double misfit(const TriangleMesh& mesh, int f, const Feature& feature, double floor, double normal_floor) {
   if (feature.type == SurfaceType::Freeform) return std::numeric_limits<double>::infinity();
-  const double distance_unit = 3.0 * feature.spread + floor;
-  const double angle_unit = 3.0 * feature.normal_spread + normal_floor;
-  const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-  double worst = 0.0;
-  for (const Eigen::Vector3d* v : {&a, &b, &c})
-    worst = std::max(worst, std::abs(signed_distance(feature.surface, *v)) / distance_unit);
-  const Eigen::Vector3d normal = (b - a).cross(c - a).normalized();
-  const double cosine = std::abs(normal.dot(surface_normal(feature.surface, (a + b + c) / 3.0)));
-  return std::max(worst, std::acos(std::min(cosine, 1.0)) / angle_unit);
+  return face_misfit(mesh, f, feature.surface, 3.0 * feature.spread + floor, 3.0 * feature.normal_spread + normal_floor);
 }
 
 // Moves faces on the rim of a patch to an edge-adjacent patch whose surface explains them when
@@ -261,16 +265,12 @@ bool explains_every_point(const Surface& surface, const PatchPoints& data, doubl
 // with a < b.
 std::map<std::pair<int, int>, double> boundary_turns(const TriangleMesh& mesh, const MeshTopology& topology,
                                                      const std::vector<int>& labels) {
-  auto normal_of = [&](int f) {
-    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-    return Eigen::Vector3d((b - a).cross(c - a).normalized());
-  };
   std::map<std::pair<int, int>, double> turns;
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int c = 0; c < 3; ++c) {
       const int g = topology.face_neighbor(f, c);
       if (g < f || labels[f] < 0 || labels[g] < 0 || labels[f] == labels[g]) continue;
-      const double turn = std::acos(std::clamp(normal_of(f).dot(normal_of(g)), -1.0, 1.0));
+      const double turn = std::acos(std::clamp(face_normal(mesh, f).dot(face_normal(mesh, g)), -1.0, 1.0));
       double& t = turns[{std::min(labels[f], labels[g]), std::max(labels[f], labels[g])}];
       t = std::max(t, std::isfinite(turn) ? turn : M_PI);
     }
@@ -330,6 +330,7 @@ bool merge_fragments(const TriangleMesh& mesh, const MeshTopology& topology, con
         fit = fit_surface(type, data, options.fit);
         exact = fit.valid && explains_every_point(fit.surface, data, exact_distance, angle);
       }
+      const size_t gathered = group.size();  // their points are in `data` already
       if (exact) {  // grow over the small pieces the surface explains
         for (size_t head = 0; head < group.size(); ++head)
           for (int q : neighbours[group[head]])
@@ -341,7 +342,7 @@ bool merge_fragments(const TriangleMesh& mesh, const MeshTopology& topology, con
       for (int q : group) in_group[q] = 0;
       if (!exact) continue;
       const int id = features[seed].id;
-      for (size_t i = 1; i < group.size(); ++i) data = concatenate(data, points[group[i]]);
+      for (size_t i = gathered; i < group.size(); ++i) data = concatenate(data, points[group[i]]);
       const SurfaceFit refit = fit_surface(type, data, options.fit, &fit.surface);
       set_fit(features[seed], refit.valid && refit.rms <= fit.rms + exact_distance ? refit : fit);
       features[seed].id = id;
@@ -492,10 +493,6 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (labels[f] == patch) faces.push_back(f);
   std::stable_sort(faces.begin(), faces.end(), [&](int x, int y) { return area[x] > area[y]; });
-  auto normal_of = [&](int f) {
-    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-    return Eigen::Vector3d((b - a).cross(c - a).normalized());
-  };
   // State of each face of the patch: not yet reached, grown into a region that turned out too small
   // (it goes to the remainder), in a kept region, or gathered into a remainder component.
   enum : char { kOutside, kUnvisited, kGrown, kKept, kRemainder };
@@ -508,7 +505,7 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
     if (open[seed] != kUnvisited) continue;
     Surface plane;
     plane.type = SurfaceType::Plane;
-    plane.axis = normal_of(seed);
+    plane.axis = face_normal(mesh, seed);
     plane.point = (mesh.V.row(mesh.F(seed, 0)) + mesh.V.row(mesh.F(seed, 1)) + mesh.V.row(mesh.F(seed, 2))).transpose() / 3.0;
     std::vector<int> region{seed}, queue{seed};
     open[seed] = kGrown;
@@ -530,7 +527,7 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
       const int f = queue[head];
       for (int c = 0; c < 3; ++c) {
         const int g = topology.face_neighbor(f, c);
-        if (g < 0 || open[g] != kUnvisited || std::abs(normal_of(g).dot(plane.axis)) < cos_limit) continue;
+        if (g < 0 || open[g] != kUnvisited || std::abs(face_normal(mesh, g).dot(plane.axis)) < cos_limit) continue;
         bool near = true;
         for (int k = 0; k < 3 && near; ++k)
           near = std::abs(signed_distance(plane, mesh.V.row(mesh.F(g, k)).transpose())) <= 3.0 * noise;
@@ -658,13 +655,8 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
     }
     size_t fitted = region.size();
     auto explains = [&](int g) {
-      const double distance = 3.0 * std::max(noise, feature.spread);
-      const double angle = 3.0 * std::max(normal_noise, feature.normal_spread);
-      const Eigen::Vector3d a = mesh.V.row(mesh.F(g, 0)), b = mesh.V.row(mesh.F(g, 1)), c = mesh.V.row(mesh.F(g, 2));
-      for (const Eigen::Vector3d* v : {&a, &b, &c})
-        if (std::abs(signed_distance(feature.surface, *v)) > distance) return false;
-      const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
-      return std::abs(n.dot(surface_normal(feature.surface, (a + b + c) / 3.0))) >= std::cos(std::min(angle, 0.5 * M_PI));
+      return face_misfit(mesh, g, feature.surface, 3.0 * std::max(noise, feature.spread),
+                         3.0 * std::max(normal_noise, feature.normal_spread)) <= 1.0;
     };
     // The disc's faces that the surface does not explain leave it; the rest grows.
     for (int f : region) in_region[f] = explains(f);

@@ -122,6 +122,11 @@ int face_components(const MeshTopology& topology, const std::vector<int>& face_c
   return count;
 }
 
+Eigen::Vector3d face_normal(const TriangleMesh& mesh, int f) {
+  const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+  return (b - a).cross(c - a).normalized();
+}
+
 Eigen::VectorXd face_areas(const TriangleMesh& mesh) {
   Eigen::VectorXd areas(mesh.num_faces());
   for (int f = 0; f < mesh.num_faces(); ++f) {

@@ -81,6 +81,9 @@ int face_components(const MeshTopology& topology, const std::vector<int>& face_c
 // Area of every face ("f:area").
 Eigen::VectorXd face_areas(const TriangleMesh& mesh);
 
+// Unit normal of face f (NaN for a degenerate face).
+Eigen::Vector3d face_normal(const TriangleMesh& mesh, int f);
+
 // Length of the bounding-box diagonal (0 for an empty mesh).
 double bounding_box_diagonal(const TriangleMesh& mesh);
 
