@@ -89,6 +89,49 @@ def bracket_solid():
     return block.makeFillet(5, vertical)
 
 
+def corner_blend_box():
+    """A 10 mm cube whose three edges at one corner are rounded (r 2.5), meeting in a ball: 10 faces."""
+    FreeCAD, Part, _ = freecad()
+    box = Part.makeBox(10, 10, 10)
+    corner = FreeCAD.Vector(10, 10, 10)
+    return box.makeFillet(2.5, [e for e in box.Edges if any((v.Point - corner).Length < 1e-9 for v in e.Vertexes)])
+
+
+def hexagon_nut(across_flats=20.0, height=8.0, bore=5.0):
+    """A hexagon nut chamfered at 30° on both ends: six flats, two end faces, a bore and twelve pieces
+    of the two chamfer cones (one at each corner of each end), all about the Z axis."""
+    FreeCAD, Part, _ = freecad()
+    V = FreeCAD.Vector
+    r = across_flats / 2
+    corner = r / np.cos(np.pi / 6)
+    prism = Part.Face(Part.makePolygon([V(corner * np.cos(np.pi / 3 * k), corner * np.sin(np.pi / 3 * k), 0)
+                                        for k in range(7)])).extrude(V(0, 0, height))
+    outside = corner + 1.0
+    rise = (outside - r) * np.tan(np.radians(30))
+    profile = Part.Face(Part.makePolygon([V(0, 0, 0), V(r, 0, 0), V(outside, 0, rise), V(outside, 0, height - rise),
+                                          V(r, 0, height), V(0, 0, height), V(0, 0, 0)]))
+    chamfered = prism.common(profile.revolve(V(0, 0, 0), V(0, 0, 1), 360))
+    return chamfered.cut(Part.makeCylinder(bore, height)).removeSplitter()
+
+
+def uniform_remesh(solid, triangles=40000):
+    """A scanner's sampling of `solid`: a uniform remesh of about `triangles` triangles (sharp edges
+    become chamfers) with the B-rep face of every triangle. Returns V, F, face, diagonal."""
+    import idealize
+    native = idealize._loader.native
+    V, F, gt = tessellate_with_faces(solid, 0.01)
+    length = np.sqrt(4 * triangle_areas(V, F).sum() / (np.sqrt(3) * triangles))
+    V2, F2 = native.remesh_isotropic(V, F, length, 4)
+    return V2, F2, gt[native.closest_faces(V, F, V2[F2].mean(axis=1))], np.linalg.norm(V2.max(0) - V2.min(0))
+
+
+def normal_noise(V, F, diagonal, seed):
+    """V moved along its vertex normals by Gaussian noise of 0.1 % of the diagonal (a scan's)."""
+    import idealize
+    normals = idealize.vertex_curvature(idealize.Mesh(V, F))["normal"]
+    return V + normals * np.random.default_rng(seed).normal(0.0, 1e-3 * diagonal, (len(V), 1))
+
+
 def tessellate_with_faces(solid, tolerance):
     """CAD-like tessellation with the B-rep face index of every triangle (shared edges welded).
 

@@ -32,14 +32,7 @@ def correct_faces(labels, gt, areas, share=0.8, purity=None):
 @pytest.fixture(scope="module")
 def bracket_scan():
     """The bracket re-tessellated uniformly (edges chamfered by the sampling), ~40k triangles."""
-    solid = shapes.bracket_solid()
-    V, F, gt = shapes.tessellate_with_faces(solid, 0.01)
-    area = shapes.triangle_areas(V, F).sum()
-    length = np.sqrt(4 * area / (np.sqrt(3) * 40000))
-    V2, F2 = idealize._loader.native.remesh_isotropic(V, F, length, 4)
-    centroids = V2[F2].mean(axis=1)
-    gt2 = gt[idealize._loader.native.closest_faces(V, F, centroids)]
-    return V2, F2, gt2, np.linalg.norm(V2.max(0) - V2.min(0))
+    return shapes.uniform_remesh(shapes.bracket_solid())
 
 
 def test_cad_tessellation_with_long_thin_triangles(tmp_path):

@@ -2,6 +2,7 @@
 
 #include "feature_graph.h"
 #include "idealization.h"
+#include "shared_axes.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -16,6 +17,16 @@
 #include <cmath>
 
 namespace idealize {
+
+void Feature::set_fit(const SurfaceFit& fit) {
+  surface = fit.surface;
+  type = fit.surface.type;
+  rms = fit.rms;
+  max_error = fit.max_error;
+  normal_rms = fit.normal_rms;
+  spread = fit.spread;
+  normal_spread = fit.normal_spread;
+}
 
 namespace {
 
@@ -127,16 +138,6 @@ std::vector<PatchPoints> patch_points(const TriangleMesh& mesh, const std::vecto
   return out;
 }
 
-void set_fit(Feature& feature, const SurfaceFit& fit) {
-  feature.surface = fit.surface;
-  feature.type = fit.surface.type;
-  feature.rms = fit.rms;
-  feature.max_error = fit.max_error;
-  feature.normal_rms = fit.normal_rms;
-  feature.spread = fit.spread;
-  feature.normal_spread = fit.normal_spread;
-}
-
 // The thesis's identification (after Besl & Jain) from the signs of H and K.
 SurfaceType curvature_type(const PatchCurvature& c, const EffectiveZero& zero_h) {
   // K = k1 k2 with both principal curvatures inside the zero range of H.
@@ -146,15 +147,17 @@ SurfaceType curvature_type(const PatchCurvature& c, const EffectiveZero& zero_h)
   return c.gaussian > 0.0 ? SurfaceType::Sphere : SurfaceType::Torus;
 }
 
+// The simplest surface type that fits the points about as well as the best one; with `curved_only`
+// planes are not candidates.
 Feature identify(const PatchPoints& pp, const PatchCurvature& curvature, const EffectiveZero& zero_h,
-                 const FeatureOptions& options, double tolerance) {
+                 const FeatureOptions& options, double tolerance, bool curved_only = false) {
   Feature feature;
   feature.vertices = static_cast<int>(pp.points.rows());
   feature.curvature_type = curvature_type(curvature, zero_h);
   feature.curvature = curvature;
   std::array<SurfaceFit, 5> fits;
   double best = std::numeric_limits<double>::infinity(), best_normal = best;
-  for (size_t t = 0; t < kTypesByPreference.size(); ++t) {
+  for (size_t t = curved_only ? 1 : 0; t < kTypesByPreference.size(); ++t) {
     fits[t] = fit_surface(kTypesByPreference[t], pp, options.fit);
     if (fits[t].valid) {
       best = std::min(best, fits[t].spread);
@@ -166,11 +169,11 @@ Feature identify(const PatchPoints& pp, const PatchCurvature& curvature, const E
   const double accepted_normal = options.residual_ratio * best_normal + options.normal_floor_degrees * M_PI / 180.0;
   // The first accepted type: a more general surface always fits a little better.
   int chosen = -1;
-  for (size_t t = 0; t < fits.size() && chosen < 0; ++t)
+  for (size_t t = curved_only ? 1 : 0; t < fits.size() && chosen < 0; ++t)
     if (fits[t].valid && fits[t].spread <= accepted && fits[t].normal_spread <= accepted_normal)
       chosen = static_cast<int>(t);
   if (chosen < 0) return feature;  // no surface could be fitted at all
-  set_fit(feature, fits[chosen]);
+  feature.set_fit(fits[chosen]);
   return feature;
 }
 
@@ -344,7 +347,7 @@ bool merge_fragments(const TriangleMesh& mesh, const MeshTopology& topology, con
       const int id = features[seed].id;
       for (size_t i = gathered; i < group.size(); ++i) data = concatenate(data, points[group[i]]);
       const SurfaceFit refit = fit_surface(type, data, options.fit, &fit.surface);
-      set_fit(features[seed], refit.valid && refit.rms <= fit.rms + exact_distance ? refit : fit);
+      features[seed].set_fit(refit.valid && refit.rms <= fit.rms + exact_distance ? refit : fit);
       features[seed].id = id;
       for (int q : group) {
         into[q] = seed;
@@ -400,10 +403,12 @@ bool absorb_fragments(const TriangleMesh& mesh, const MeshTopology& topology, co
 // here, not the robust spreads, which would not see a small foreign face in the union. Each patch
 // merges at most once per call; `rejected` remembers the pairs that did not fit together until one
 // of them grows. On an exact tessellation (`exact`) the merged surface must also explain every
-// vertex to within `exact_distance` and every facet normal. Returns whether any pair merged.
+// vertex to within `exact_distance` and every facet normal; on a noisy one each part must fit it
+// about as well as its own surface, `noise` being the least RMS expected. Returns whether any pair
+// merged.
 bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<PatchPoints>& points,
                    const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
-                   const FeatureOptions& options, double tolerance, bool exact, double exact_distance,
+                   const FeatureOptions& options, double tolerance, bool exact, double exact_distance, double noise,
                    std::vector<Feature>& features, std::vector<int>& labels, std::set<std::pair<int, int>>& rejected, const ProgressSpan& progress) {
   std::vector<std::pair<int, int>> pairs;  // adjacent, and on an exact tessellation not across a crease
   for (const auto& [pair, turn] : boundary_turns(mesh, topology, labels))
@@ -431,7 +436,16 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     const double normal_limit = options.residual_ratio * std::max(fa.normal_rms, fb.normal_rms) + normal_floor;
     auto accepted = [&](const Feature& u) {
       if (u.type == SurfaceType::Freeform || u.rms > limit || u.normal_rms > normal_limit) return false;
-      if (!exact) return true;
+      if (!exact) {
+        // An RMS over the union hides a small foreign part (a pocket's wall in a large plane, whose
+        // RMS then lets the next one in).
+        for (const auto& [part, own] : {std::pair{&pa, &fa}, std::pair{&pb, &fb}}) {
+          double rms, max_error;
+          fit_residuals(u.surface, part->points, part->weights, rms, max_error);
+          if (rms > options.residual_ratio * std::max(own->rms, noise) + tolerance) return false;
+        }
+        return true;
+      }
       // As much normal spread as the parts have is allowed, plus the floor (and the facets' chords).
       const double angle = 3.0 * std::max(fa.normal_spread, fb.normal_spread) + normal_floor;
       return explains_every_point(u.surface, pa, exact_distance, angle) &&
@@ -444,7 +458,7 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     if ((same_type || !larger_small) && larger.type != SurfaceType::Freeform) {
       const SurfaceFit fit = fit_surface(larger.type, both, options.fit, &larger.surface);
       if (fit.valid) {
-        set_fit(merged, fit);
+        merged.set_fit(fit);
         ok = accepted(merged);
       }
     }
@@ -486,6 +500,53 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
 // stays whole that way, while on an exact tessellation (min_region_faces = 1) curved parts fall
 // apart into planar facets that merging joins again. The first region keeps the patch's id, the
 // others get new ids from `next_id` on.
+// State of each face of a patch being split: not in the patch, not yet reached, grown into a region
+// that turned out too small (it goes to the remainder), in a kept region, or gathered into a
+// remainder component.
+enum FaceState : char { kOutside, kUnvisited, kGrown, kKept, kRemainder };
+
+// The faces of `patch` that no kept region took (state kUnvisited or kGrown), in connected
+// components: a component too small to be a face of its own joins the kept region it borders most,
+// the others become patches, the first of them keeping the id `patch` when `patch_free`. `faces`
+// orders the seeds. Returns the next free id.
+int label_remainder(const MeshTopology& topology, const std::vector<int>& faces, int patch, bool patch_free,
+                    std::vector<char>& state, std::vector<int>& labels, int next_id, const ProgressSpan& progress) {
+  long long visited = 0;
+  for (int seed : faces) {
+    if (state[seed] != kUnvisited && state[seed] != kGrown) continue;
+    std::vector<int> component{seed};
+    state[seed] = kRemainder;
+    std::vector<std::pair<int, int>> borders;  // (region id, shared edges)
+    for (size_t head = 0; head < component.size(); ++head) {
+      progress.poll(++visited, 1 << 12);
+      const int f = component[head];
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(f, c);
+        if (g < 0) continue;
+        if (state[g] == kKept) {
+          auto it = std::find_if(borders.begin(), borders.end(), [&](const auto& b) { return b.first == labels[g]; });
+          if (it == borders.end()) borders.emplace_back(labels[g], 1);
+          else ++it->second;
+        } else if (state[g] == kUnvisited || state[g] == kGrown) {
+          state[g] = kRemainder;
+          component.push_back(g);
+        }
+      }
+    }
+    int id;
+    if (static_cast<int>(component.size()) < kInteriorPoints && !borders.empty()) {
+      id = std::max_element(borders.begin(), borders.end(), [](const auto& x, const auto& y) {
+             return x.second != y.second ? x.second < y.second : x.first > y.first;
+           })->first;
+    } else {
+      id = patch_free ? patch : next_id++;
+      patch_free = false;
+    }
+    for (int f : component) labels[f] = id;
+  }
+  return next_id;
+}
+
 int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Eigen::VectorXd& area, int patch,
                 double noise, double normal_noise, int min_region_faces, std::vector<int>& labels, int next_id,
                 const ProgressSpan& progress) {
@@ -493,9 +554,6 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (labels[f] == patch) faces.push_back(f);
   std::stable_sort(faces.begin(), faces.end(), [&](int x, int y) { return area[x] > area[y]; });
-  // State of each face of the patch: not yet reached, grown into a region that turned out too small
-  // (it goes to the remainder), in a kept region, or gathered into a remainder component.
-  enum : char { kOutside, kUnvisited, kGrown, kKept, kRemainder };
   std::vector<char> open(mesh.num_faces(), kOutside);
   for (int f : faces) open[f] = kUnvisited;
   const double cos_limit = std::cos(std::min(3.0 * normal_noise, 0.5 * M_PI));
@@ -553,41 +611,7 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
     for (int f : region) labels[f] = id;
     for (int f : region) open[f] = kKept;
   }
-  // The remainder (faces no kept region took) in connected components: a component too small to
-  // be a face of its own joins the kept region it borders most.
-  for (int seed : faces) {
-    if (open[seed] == kKept || open[seed] == kRemainder || labels[seed] != patch) continue;
-    std::vector<int> component{seed};
-    open[seed] = kRemainder;
-    std::vector<std::pair<int, int>> borders;  // (region id, shared edges)
-    for (size_t head = 0; head < component.size(); ++head) {
-      progress.poll(++visited, 1 << 12);
-      const int f = component[head];
-      for (int c = 0; c < 3; ++c) {
-        const int g = topology.face_neighbor(f, c);
-        if (g < 0) continue;
-        if (open[g] == kKept) {  // a kept region
-          auto it = std::find_if(borders.begin(), borders.end(), [&](const auto& b) { return b.first == labels[g]; });
-          if (it == borders.end()) borders.emplace_back(labels[g], 1);
-          else ++it->second;
-        } else if (labels[g] == patch && (open[g] == kUnvisited || open[g] == kGrown)) {
-          open[g] = kRemainder;
-          component.push_back(g);
-        }
-      }
-    }
-    int id;
-    if (static_cast<int>(component.size()) < kInteriorPoints && !borders.empty()) {
-      id = std::max_element(borders.begin(), borders.end(), [](const auto& x, const auto& y) {
-             return x.second != y.second ? x.second < y.second : x.first > y.first;
-           })->first;
-    } else {
-      id = first ? patch : next_id++;
-      first = false;
-    }
-    for (int f : component) labels[f] = id;
-  }
-  return next_id;
+  return label_remainder(topology, faces, patch, first, open, labels, next_id, progress);
 }
 
 // Splits a noisy patch that no single surface fits into regions that one surface each fits: a chain
@@ -596,8 +620,9 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
 // identified; when one surface fits it to within `fits_below` RMS, the region grows over the faces
 // whose vertices lie within 3 σ of the surface and whose normals lie within 3 σ_n of its normals (σ
 // the larger of the mesh's noise and the fit's spread), refitted as it doubles. Regions of at least
-// `min_region_faces` faces get new ids from `next_id` on; the faces no region took stay with the
-// patch, and the reassignment that follows moves its rim faces to the surfaces that explain them.
+// `min_region_faces` faces get new ids from `next_id` on; the faces no region took are labelled by
+// label_remainder (a corner ball between fillets, a small boss on a plate), and the reassignment
+// that follows moves rim faces to the surfaces that explain them.
 int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
                         double normal_noise, double fits_below, int min_region_faces,
                         const std::function<Feature(const PatchPoints&)>& identify_points, const FitOptions& fit_options,
@@ -624,9 +649,13 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
       }
     }
   std::vector<int> seeds = queue;  // deepest first, ties by face index
+  std::vector<int> faces;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (labels[f] == patch) faces.push_back(f);
   std::stable_sort(seeds.begin(), seeds.end(), [&](int x, int y) { return depth[x] != depth[y] ? depth[x] > depth[y] : x < y; });
 
   const int disc_faces = 2 * kInteriorPoints;
+  const int first_id = next_id;
   std::vector<char> tried(mesh.num_faces(), 0), in_region(mesh.num_faces(), 0);
   std::vector<int> slot(mesh.num_vertices(), -1);
   auto all_points = [&](const std::vector<int>& faces) {
@@ -670,7 +699,7 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
         region.push_back(g);
         if (region.size() >= 2 * fitted) {  // refit as the region doubles
           const SurfaceFit fit = fit_surface(feature.type, all_points(region), fit_options, &feature.surface);
-          if (fit.valid) set_fit(feature, fit);
+          if (fit.valid) feature.set_fit(fit);
           fitted = region.size();
         }
       }
@@ -680,7 +709,10 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
     for (int f : region) labels[f] = next_id;
     ++next_id;
   }
-  return next_id;
+  if (next_id == first_id) return next_id;  // nothing split off: the patch stays whole
+  std::vector<char> state(mesh.num_faces(), kOutside);
+  for (int f : faces) state[f] = labels[f] == patch ? kUnvisited : kKept;
+  return label_remainder(topology, faces, patch, true, state, labels, next_id, progress);
 }
 
 // On an exact tessellation, faces that the segmentation merged come apart into pieces that their
@@ -863,7 +895,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         Feature& f = layer.features[p];
         if (!changed[p] || f.type == SurfaceType::Freeform) continue;
         const SurfaceFit fit = fit_surface(f.type, points[p], options.fit, &f.surface);
-        if (fit.valid) set_fit(f, fit);
+        if (fit.valid) f.set_fit(fit);
       }
     }
     // A patch that lost or gained a good part of its faces may be of another type now (the rim of
@@ -876,6 +908,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   reassign(progress.sub("reassign", 0.06, 0.19));
   stage("reassign");
   bool exact_mesh = false;  // decided below
+  double noise = floor;      // the typical patch's spread: decided below
   const ProgressSpan split = progress.sub("split", 0.19, 0.355);
   split.step(0.0);
   // Split what no surface fits into planar regions (and, on noisy meshes, the connected rest);
@@ -890,11 +923,13 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         normal_rms.push_back(f.normal_spread);
       }
     if (!rms.empty()) {
-      std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
-      std::nth_element(normal_rms.begin(), normal_rms.begin() + normal_rms.size() / 2, normal_rms.end());
-      exact_mesh = rms[rms.size() / 2] < kExactFraction * layer.distance_tolerance;
-      const double noise = rms[rms.size() / 2] + floor;
-      const double normal_noise = normal_rms[normal_rms.size() / 2] + options.normal_floor_degrees * M_PI / 180.0;
+      // The lower median: of two patches, the one that fits shows the noise.
+      const size_t middle = (rms.size() - 1) / 2;
+      std::nth_element(rms.begin(), rms.begin() + middle, rms.end());
+      std::nth_element(normal_rms.begin(), normal_rms.begin() + middle, normal_rms.end());
+      exact_mesh = rms[middle] < kExactFraction * layer.distance_tolerance;
+      noise = rms[middle] + floor;
+      const double normal_noise = normal_rms[middle] + options.normal_floor_degrees * M_PI / 180.0;
       int next_id = num_patches;
       // Measured on the benchmark: without the tolerance term, sculpted (undulating) patches split
       // into pieces that do not join again. An exact tessellation does not undulate: what does not
@@ -910,14 +945,31 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       auto badly_fitting = [&](const Feature& f) {
         return f.type == SurfaceType::Freeform || f.rms > split_above || f.normal_rms > split_normals_above;
       };
+      // Grows the surfaces that fit discs of patch p. A patch that the histograms call curved has no
+      // planar regions: across a disc, the sag of a large fillet hides within the distance tolerance.
+      auto grow_surfaces = [&](int p, const ProgressSpan& span) {
+        const bool curved = curvature_type(curvature[p], zero_mean_curvature) != SurfaceType::Plane;
+        return split_into_surfaces(
+            mesh, topology, p, noise, normal_noise, split_above, 2 * kInteriorPoints,
+            [&](const PatchPoints& pp) {
+              return identify(pp, curvature[p], zero_mean_curvature, options, layer.distance_tolerance,
+                              curved);
+            },
+            options.fit, layer.labels, next_id, span);
+      };
+      // On a noisy mesh, surfaces grow in a large patch first (fillets of one radius in a chain);
+      // planar regions split the rest.
+      const std::vector<int> first_count = triangle_counts();
       for (int p = 0; p < num_patches; ++p) {
-        split.sub(0.0, 0.5).step(static_cast<double>(p) / num_patches);
-        const Feature& f = layer.features[p];
-        if (badly_fitting(f)) {
+        const ProgressSpan this_patch = split.sub(0.0, 0.5).sub(static_cast<double>(p) / num_patches,
+                                                                static_cast<double>(p + 1) / num_patches);
+        if (!badly_fitting(layer.features[p])) continue;
+        was_split[p] = exact_mesh ? 1 : 2;
+        const int before = next_id;
+        if (!exact_mesh && first_count[p] >= 4 * kInteriorPoints) next_id = grow_surfaces(p, this_patch);
+        if (next_id == before)
           next_id = split_patch(mesh, topology, area, p, noise, normal_noise, exact_mesh ? 1 : 2 * kInteriorPoints,
-                                layer.labels, next_id, split);
-          was_split[p] = exact_mesh ? 1 : 2;
-        }
+                                layer.labels, next_id, this_patch);
       }
       if (next_id > num_patches) {
         std::vector<char> which(next_id, 0);
@@ -941,10 +993,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         for (int p = 0; p < pieces; ++p) {
                 if (count[p] < 4 * kInteriorPoints || !badly_fitting(layer.features[p])) continue;
           const int first_new = next_id;
-          next_id = split_into_surfaces(
-              mesh, topology, p, noise, normal_noise, split_above, 2 * kInteriorPoints,
-              [&](const PatchPoints& pp) { return identify_points(pp, curvature[p]); }, options.fit, layer.labels,
-              next_id, split.sub(0.8, 0.9));
+          next_id = grow_surfaces(p, split.sub(0.8, 0.9));
           curvature.resize(next_id, curvature[p]);
           which.resize(next_id, 1);
           which[p] = next_id > first_new;
@@ -974,7 +1023,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     const ProgressSpan this_pass = merge.sub(merged_so_far, merged_so_far + share);
     merged_so_far += share;
     bool merged = merge_patches(mesh, topology, points, identify_points, options, layer.distance_tolerance, exact_mesh,
-                                exact_distance, layer.features, layer.labels, rejected, this_pass.sub(0.0, 0.9));
+                                exact_distance, noise, layer.features, layer.labels, rejected, this_pass.sub(0.0, 0.9));
     // When no pair merges any more, the small pieces left may still make surfaces together (tried
     // a few times: each time merging may grow the surfaces next to them).
     if (!merged && exact_mesh && fragment_rounds-- > 0)
@@ -997,6 +1046,18 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       layer.features[layer.labels[f]].area += area[f];
       ++layer.features[layer.labels[f]].triangles;
     }
+
+  // On a noisy mesh, features whose own points cannot fix an axis take a related feature's.
+  if (!exact_mesh) {
+    SharedAxisOptions shared;
+    shared.determined_points = 4 * kInteriorPoints;
+    shared.angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
+    shared.distance_tolerance = layer.distance_tolerance;
+    shared.residual_ratio = options.residual_ratio;
+    shared.normal_floor = options.normal_floor_degrees * M_PI / 180.0;
+    fit_about_shared_axes(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size())), shared,
+                          layer.features);
+  }
 
   // Freeform: the best fit is much worse than the typical patch of this mesh (which takes a few
   // patches to tell; with fewer, the tolerances alone decide).

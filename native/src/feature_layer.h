@@ -91,6 +91,9 @@ struct Feature {
   double area = 0.0;
   int triangles = 0;
   int vertices = 0;          // vertices the fit used
+
+  // Takes the fit's surface, type and residuals.
+  void set_fit(const SurfaceFit& fit);
 };
 
 enum class Continuity { G0, G1 };

@@ -142,10 +142,28 @@ Surface seed_sphere(const Sample& s) {
   return out;
 }
 
+// A cylinder's axis is perpendicular to all its normals. Across a narrow band their mean is long,
+// and they vary least along it (to second order), not along the axis, where noise tilts them: the
+// axis is then sought perpendicular to the mean.
+Eigen::Vector3d cylinder_axis(const Sample& s) {
+  const Eigen::Vector3d mean = weighted_mean(s.n, s.v);
+  if (mean.norm() < 0.5) return constant_angle_axis(s);  // most of the way round
+  Eigen::Vector3d e1, e2;
+  orthonormal_frame(mean.normalized(), e1, e2);
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (size_t i = 0; i < s.n.size(); ++i) {
+    const Eigen::Vector2d t(s.n[i].dot(e1), s.n[i].dot(e2));
+    cov += s.v[i] * t * t.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(cov);
+  const Eigen::Vector2d least = solver.eigenvectors().col(0);
+  return (least.x() * e1 + least.y() * e2).normalized();
+}
+
 Surface seed_cylinder(const Sample& s) {
   Surface out;
   out.type = SurfaceType::Cylinder;
-  out.axis = constant_angle_axis(s);
+  out.axis = cylinder_axis(s);
   Eigen::Vector3d e1, e2;
   orthonormal_frame(out.axis, e1, e2);
   std::vector<Eigen::Vector2d> q(s.p.size());
@@ -345,12 +363,11 @@ double weighted_median(std::vector<std::pair<double, double>> values) {
 }
 
 namespace {
-
-// The normal RMS angle and the robust spreads of a fit, on an even subsample of at most
-// kStatisticsPoints points and samples: medians and means of that many are as good as of all.
+// Medians and means of this many points and samples (an even subsample) are as good as of all.
 constexpr Eigen::Index kStatisticsPoints = 2000;
+}  // namespace
 
-void fit_statistics(const FitData& data, SurfaceFit& fit) {
+void measure_spreads(const FitData& data, SurfaceFit& fit) {
   const Eigen::Index point_stride = std::max<Eigen::Index>(1, data.points.rows() / kStatisticsPoints);
   const Eigen::Index sample_stride = std::max<Eigen::Index>(1, data.sample_points.rows() / kStatisticsPoints);
   std::vector<std::pair<double, double>> distance, angle;
@@ -369,7 +386,6 @@ void fit_statistics(const FitData& data, SurfaceFit& fit) {
   fit.normal_spread = 1.4826 * weighted_median(std::move(angle));
 }
 
-}  // namespace
 
 FitData concatenate(const FitData& a, const FitData& b) {
   FitData out;
@@ -431,7 +447,50 @@ SurfaceFit fit_surface(SurfaceType type, const FitData& data, const FitOptions& 
   fit.surface = to_world(better ? refined : initial, centre, scale);
   fit_residuals(fit.surface, points, weights, fit.rms, fit.max_error);
   fit.valid = plausible(fit.surface);
-  fit_statistics(data, fit);
+  measure_spreads(data, fit);
+  return fit;
+}
+
+SurfaceFit fit_about_axis(SurfaceType type, const FitData& data, const Eigen::Vector3d& origin,
+                          const Eigen::Vector3d& axis) {
+  SurfaceFit fit;
+  fit.surface.type = type;
+  const double total = data.weights.sum();
+  if ((type != SurfaceType::Cylinder && type != SurfaceType::Cone) || data.points.rows() < 2 || !(total > 0.0))
+    return fit;
+  // Profile: height z along the axis, distance ρ from it; weighted means and covariance.
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  std::vector<Eigen::Vector2d> zr(data.points.rows());
+  for (Eigen::Index i = 0; i < data.points.rows(); ++i) {
+    const Eigen::Vector3d q = data.points.row(i).transpose() - origin;
+    const double z = q.dot(axis);
+    zr[i] = Eigen::Vector2d(z, (q - z * axis).norm());
+    mean += data.weights[i] * zr[i];
+  }
+  mean /= total;
+  Surface& s = fit.surface;
+  s.axis = axis;
+  if (type == SurfaceType::Cylinder) {
+    s.point = origin;
+    s.radius = mean.y();
+  } else {
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    for (size_t i = 0; i < zr.size(); ++i) cov += data.weights[i] * (zr[i] - mean) * (zr[i] - mean).transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(cov);
+    Eigen::Vector2d line = solver.eigenvectors().col(1);  // along the profile
+    if (line.y() < 0.0) line = -line;                     // ρ grows along it
+    if (!(line.x() != 0.0) || !(line.y() > 0.0)) return fit;  // along or across the axis
+    const double sign = line.x() < 0.0 ? -1.0 : 1.0;         // the cone opens along sign · axis
+    s.axis = sign * axis;
+    const double along = std::abs(line.x());
+    s.half_angle = std::atan2(line.y(), along);
+    // The apex: where the profile line meets the axis (ρ = 0), as a height along s.axis.
+    const double z_apex = sign * mean.x() - mean.y() * along / line.y();
+    s.point = origin + z_apex * s.axis;
+  }
+  if (!plausible(s)) return fit;
+  fit_residuals(s, data.points, data.weights, fit.rms, fit.max_error);
+  fit.valid = true;
   return fit;
 }
 

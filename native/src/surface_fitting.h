@@ -3,8 +3,9 @@
 // Seeds come from direct, non-iterative formulas (thesis 4.2, here on normals rather than on
 // principal curvatures, which are the noisiest quantity of a scan): plane by principal components;
 // sphere by the algebraic fit; cylinder and cone axes as the direction the normals do not vary in
-// (normals of a cone make a constant angle with its axis, those of a cylinder a right angle), their
-// profiles by linear fits; a torus axis as the line that all normal lines meet, found as the linear
+// (normals of a cone make a constant angle with its axis, those of a cylinder a right angle; across
+// a cylinder's narrow band it is sought perpendicular to the normals' mean), their profiles by
+// linear fits; a torus axis as the line that all normal lines meet, found as the linear
 // line complex of the normals (H. Pottmann, T. Randrup, "Rotational and helical surface
 // approximation for reverse engineering", Computing 60(4), 1998), its tube from a circle fitted to
 // the profile. Going beyond the thesis, a Levenberg–Marquardt refinement of the geometric distance
@@ -57,6 +58,17 @@ struct SurfaceFit {
 // direct formulas otherwise.
 SurfaceFit fit_surface(SurfaceType type, const FitData& data, const FitOptions& options = {},
                        const Surface* initial = nullptr);
+
+// Fits a cylinder or cone (`type`) whose axis is the line through `origin` along `axis` (unit) to
+// `data`: only the profile is fitted (radius; apex and half-angle, by a total-least-squares line
+// through the points' heights along and distances from the axis). The thesis's semi-defined
+// features (4.3), whose axis a related feature defines. Invalid where the profile is not of the
+// type (a cone's line along or across the axis). The spreads are left to measure_spreads.
+SurfaceFit fit_about_axis(SurfaceType type, const FitData& data, const Eigen::Vector3d& origin,
+                          const Eigen::Vector3d& axis);
+
+// The fit's normal RMS angle and robust spreads over `data` (fit_surface measures them).
+void measure_spreads(const FitData& data, SurfaceFit& fit);
 
 // The weighted median of (value, weight) pairs (0 for none).
 double weighted_median(std::vector<std::pair<double, double>> values);

@@ -1,0 +1,38 @@
+// Semi-defined features (J. S.-S. Chen, "Hybrid CAD modeler", thesis 4.3): a feature whose own
+// points cannot fix its axis takes the axis of a feature that can. A narrow piece of a cone (the
+// chamfer of a hexagon nut, cut into six by the flats) fits a plane or a tilted cylinder about as
+// well as its cone; about the bore's axis, only the cone fits.
+#pragma once
+
+#include "feature_layer.h"
+#include "surface_fitting.h"
+
+#include <vector>
+
+namespace idealize {
+
+struct SharedAxisOptions {
+  // A cylinder, cone or torus fitted to at least this many points, whose normals turn by about a
+  // right angle or more, has an axis others may share (a sliver's axis is a guess).
+  int determined_points = 96;
+  // Axes within this angle (radians) and distance are one axis; a cone closer than the angle to a
+  // cylinder or a plane is one of those, and a surface that turns by less across a patch is flat.
+  double angle_tolerance = 5.0 * 3.14159265358979323846 / 180.0;
+  double distance_tolerance = 0.0;
+  // As in identification (FeatureOptions): a surface fits as well as another when its spread is at
+  // most residual_ratio times the other's plus the distance tolerance, and its normal spread at
+  // most residual_ratio times the other's plus normal_floor (radians).
+  double residual_ratio = 1.5;
+  double normal_floor = 2.0 * 3.14159265358979323846 / 180.0;
+};
+
+// Refits the planes, cylinders and cones of `features` (`points`: what the fits see of each, by
+// feature id) about the determined axes of the part's other features. A cylinder or cone whose own
+// axis is none of them takes the coaxial cylinder or cone that fits as well as its own surface
+// (the one of least spread). A plane takes one only where its points fit it better than the plane
+// (and its normals as well) and it turns across the patch by more than the angle tolerance.
+// Returns the number of features that changed.
+int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOptions& options,
+                          std::vector<Feature>& features);
+
+}  // namespace idealize
