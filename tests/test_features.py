@@ -138,11 +138,12 @@ def layer_of(solid, tolerance=0.05):
 
 
 def dominant(layer, gt, areas):
-    """The feature holding most of the area of every B-rep face."""
+    """The feature holding most of the area of every B-rep face (faces no feature holds: None)."""
     out = []
     for face in range(gt.max() + 1):
         inside = (gt == face) & (layer.labels >= 0)
-        out.append(layer.features[np.argmax(np.bincount(layer.labels[inside], weights=areas[inside]))])
+        out.append(layer.features[np.argmax(np.bincount(layer.labels[inside], weights=areas[inside]))]
+                   if inside.any() else None)
     return out
 
 
@@ -338,16 +339,6 @@ def test_noisy_scan_of_the_bracket(noisy_scan):
     assert 0.5e-3 * diag < layer.deviation["rms"] < 2e-3 * diag
 
 
-def dominant_features(layer, gt, areas):
-    """The feature holding most of the area of every B-rep face (faces no feature holds: None)."""
-    out = []
-    for face in range(gt.max() + 1):
-        inside = (gt == face) & (layer.labels >= 0)
-        out.append(layer.features[np.argmax(np.bincount(layer.labels[inside], weights=areas[inside]))]
-                   if inside.any() else None)
-    return out
-
-
 @needs_freecad
 @pytest.mark.parametrize("seed", [1, 3])
 def test_noisy_fillets_meeting_in_a_corner_ball(seed):
@@ -360,7 +351,7 @@ def test_noisy_fillets_meeting_in_a_corner_ball(seed):
     layer = idealize.idealize(idealize.Mesh(V, F))
     areas = shapes.triangle_areas(V, F)
     assert correct_faces(layer.labels, gt, areas) >= 8  # of 10: planes and fillets all, the ball seldom
-    fillets = [f for face, f in zip(solid.Faces, dominant_features(layer, gt, areas))
+    fillets = [f for face, f in zip(solid.Faces, dominant(layer, gt, areas))
                if type(face.Surface).__name__ == "Cylinder"]
     assert len(fillets) == 3
     for f in fillets:
@@ -380,7 +371,7 @@ def test_noisy_hexagon_nut(seed):
     layer = idealize.idealize(idealize.Mesh(V, F))
     areas = shapes.triangle_areas(V, F)
     assert correct_faces(layer.labels, gt, areas) >= 13  # of 23 (14-17 over seeds 1-6): flats, ends, bore, most pieces
-    found = dominant_features(layer, gt, areas)
+    found = dominant(layer, gt, areas)
     flats = [f for face, f in zip(solid.Faces, found)
              if type(face.Surface).__name__ == "Plane" and abs(face.normalAt(0, 0).z) < 0.1]
     assert len(flats) == 6 and all(f["type"] == "plane" for f in flats)

@@ -119,8 +119,8 @@ void build_feature_graph(const TriangleMesh& mesh, const MeshTopology& topology,
                  return std::abs((features[y].surface.point - features[x].surface.point).dot(features[x].surface.axis)) <= distance_tolerance;
                }), relations);
     add_groups("coaxial", cluster(axial, features, [&](int x, int y) {
-                 const Eigen::Vector3d d = features[y].surface.point - features[x].surface.point;
-                 return (d - d.dot(features[x].surface.axis) * features[x].surface.axis).norm() <= distance_tolerance;
+                 const Surface& sx = features[x].surface;
+                 return axial_coordinates(sx.point, sx.axis, features[y].surface.point).distance <= distance_tolerance;
                }), relations);
   }
   add_groups("equal_radius", cluster(radial, features, [&](int x, int y) {

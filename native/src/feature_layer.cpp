@@ -492,14 +492,6 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
   return any;
 }
 
-// Splits a patch that no surface fits (the segmentation merged faces across an edge it did not
-// resolve) into planar regions grown from its largest faces: a face joins while its vertices lie
-// within 3 σ of the region's plane and its normal within 3 σ of the plane's, σ being the noise of
-// the mesh's well-fitted patches. Regions of fewer than `min_region_faces` faces go back to a
-// remainder whose connected components become patches of their own: on a noisy mesh a curved face
-// stays whole that way, while on an exact tessellation (min_region_faces = 1) curved parts fall
-// apart into planar facets that merging joins again. The first region keeps the patch's id, the
-// others get new ids from `next_id` on.
 // State of each face of a patch being split: not in the patch, not yet reached, grown into a region
 // that turned out too small (it goes to the remainder), in a kept region, or gathered into a
 // remainder component.
@@ -547,6 +539,14 @@ int label_remainder(const MeshTopology& topology, const std::vector<int>& faces,
   return next_id;
 }
 
+// Splits a patch that no surface fits (the segmentation merged faces across an edge it did not
+// resolve) into planar regions grown from its largest faces: a face joins while its vertices lie
+// within 3 σ of the region's plane and its normal within 3 σ of the plane's, σ being the noise of
+// the mesh's well-fitted patches. Regions of fewer than `min_region_faces` faces go back to a
+// remainder whose connected components become patches of their own: on a noisy mesh a curved face
+// stays whole that way, while on an exact tessellation (min_region_faces = 1) curved parts fall
+// apart into planar facets that merging joins again. The first region keeps the patch's id, the
+// others get new ids from `next_id` on.
 int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Eigen::VectorXd& area, int patch,
                 double noise, double normal_noise, int min_region_faces, std::vector<int>& labels, int next_id,
                 const ProgressSpan& progress) {
@@ -628,9 +628,10 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
                         const std::function<Feature(const PatchPoints&)>& identify_points, const FitOptions& fit_options,
                         std::vector<int>& labels, int next_id, const ProgressSpan& progress) {
   // Depth of every face of the patch: edge steps from its rim (multi-source breadth-first search).
-  std::vector<int> depth(mesh.num_faces(), -1), queue;
+  std::vector<int> depth(mesh.num_faces(), -1), queue, faces;
   for (int f = 0; f < mesh.num_faces(); ++f) {
     if (labels[f] != patch) continue;
+    faces.push_back(f);
     for (int c = 0; c < 3; ++c) {
       const int g = topology.face_neighbor(f, c);
       if (g < 0 || labels[g] != patch) {
@@ -649,17 +650,14 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
       }
     }
   std::vector<int> seeds = queue;  // deepest first, ties by face index
-  std::vector<int> faces;
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    if (labels[f] == patch) faces.push_back(f);
   std::stable_sort(seeds.begin(), seeds.end(), [&](int x, int y) { return depth[x] != depth[y] ? depth[x] > depth[y] : x < y; });
 
   const int disc_faces = 2 * kInteriorPoints;
   const int first_id = next_id;
   std::vector<char> tried(mesh.num_faces(), 0), in_region(mesh.num_faces(), 0);
   std::vector<int> slot(mesh.num_vertices(), -1);
-  auto all_points = [&](const std::vector<int>& faces) {
-    return face_points(mesh, faces.data(), static_cast<int>(faces.size()), slot, [](int) { return false; });
+  auto all_points = [&](const std::vector<int>& region_faces) {
+    return face_points(mesh, region_faces.data(), static_cast<int>(region_faces.size()), slot, [](int) { return false; });
   };
   long long visited = 0;
   for (int seed : seeds) {
@@ -991,7 +989,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         const std::vector<int> count = triangle_counts();
         std::vector<char> which(pieces, 0);
         for (int p = 0; p < pieces; ++p) {
-                if (count[p] < 4 * kInteriorPoints || !badly_fitting(layer.features[p])) continue;
+          if (count[p] < 4 * kInteriorPoints || !badly_fitting(layer.features[p])) continue;
           const int first_new = next_id;
           next_id = grow_surfaces(p, split.sub(0.8, 0.9));
           curvature.resize(next_id, curvature[p]);

@@ -25,8 +25,7 @@ bool determined_axis(const Feature& feature, const FitData& data, const SharedAx
 
 bool same_axis(const Surface& s, const Axis& axis, const SharedAxisOptions& options) {
   if (std::abs(s.axis.dot(axis.direction)) < std::cos(options.angle_tolerance)) return false;
-  const Eigen::Vector3d offset = s.point - axis.origin;
-  return (offset - offset.dot(axis.direction) * axis.direction).norm() <= options.distance_tolerance;
+  return axial_coordinates(axis.origin, axis.direction, s.point).distance <= options.distance_tolerance;
 }
 
 // The simpler of a cylinder and a cone about the axis that fits (by RMS, as identification

@@ -9,29 +9,6 @@ namespace idealize {
 
 namespace {
 
-// Position of p relative to an axis through `origin`: height along it, distance from it and the
-// unit direction away from it (any perpendicular direction on the axis itself).
-struct AxialCoordinates {
-  double height, distance;
-  Eigen::Vector3d radial;
-};
-
-inline AxialCoordinates axial_coordinates(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis,
-                                   const Eigen::Vector3d& p) {
-  const Eigen::Vector3d q = p - origin;
-  AxialCoordinates c;
-  c.height = q.dot(axis);
-  const Eigen::Vector3d r = q - c.height * axis;
-  c.distance = r.norm();
-  if (c.distance > 0.0) {
-    c.radial = r / c.distance;
-  } else {
-    Eigen::Vector3d e2;
-    orthonormal_frame(axis, c.radial, e2);
-  }
-  return c;
-}
-
 Eigen::Vector3d unit_or(const Eigen::Vector3d& v, const Eigen::Vector3d& fallback) {
   const double n = v.norm();
   return n > 0.0 ? Eigen::Vector3d(v / n) : fallback;

@@ -50,4 +50,27 @@ Eigen::Vector3d surface_normal(const Surface& surface, const Eigen::Vector3d& p)
 // deterministically from the axis alone.
 void orthonormal_frame(const Eigen::Vector3d& axis, Eigen::Vector3d& e1, Eigen::Vector3d& e2);
 
+// Position of p relative to an axis through `origin` along `axis` (unit): height along it, distance
+// from it and the unit direction away from it (any perpendicular direction on the axis itself).
+struct AxialCoordinates {
+  double height, distance;
+  Eigen::Vector3d radial;
+};
+
+inline AxialCoordinates axial_coordinates(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis,
+                                          const Eigen::Vector3d& p) {
+  const Eigen::Vector3d q = p - origin;
+  AxialCoordinates c;
+  c.height = q.dot(axis);
+  const Eigen::Vector3d r = q - c.height * axis;
+  c.distance = r.norm();
+  if (c.distance > 0.0) {
+    c.radial = r / c.distance;
+  } else {
+    Eigen::Vector3d e2;
+    orthonormal_frame(axis, c.radial, e2);
+  }
+  return c;
+}
+
 }  // namespace idealize

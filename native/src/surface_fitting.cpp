@@ -116,9 +116,8 @@ void profile(const Sample& s, const Eigen::Vector3d& origin, const Eigen::Vector
              std::vector<Eigen::Vector2d>& zr) {
   zr.resize(s.p.size());
   for (size_t i = 0; i < s.p.size(); ++i) {
-    const Eigen::Vector3d q = s.p[i] - origin;
-    const double z = q.dot(axis);
-    zr[i] = Eigen::Vector2d(z, (q - z * axis).norm());
+    const AxialCoordinates c = axial_coordinates(origin, axis, s.p[i]);
+    zr[i] = Eigen::Vector2d(c.height, c.distance);
   }
 }
 
@@ -386,7 +385,6 @@ void measure_spreads(const FitData& data, SurfaceFit& fit) {
   fit.normal_spread = 1.4826 * weighted_median(std::move(angle));
 }
 
-
 FitData concatenate(const FitData& a, const FitData& b) {
   FitData out;
   out.points.resize(a.points.rows() + b.points.rows(), 3);
@@ -462,9 +460,8 @@ SurfaceFit fit_about_axis(SurfaceType type, const FitData& data, const Eigen::Ve
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
   std::vector<Eigen::Vector2d> zr(data.points.rows());
   for (Eigen::Index i = 0; i < data.points.rows(); ++i) {
-    const Eigen::Vector3d q = data.points.row(i).transpose() - origin;
-    const double z = q.dot(axis);
-    zr[i] = Eigen::Vector2d(z, (q - z * axis).norm());
+    const AxialCoordinates c = axial_coordinates(origin, axis, data.points.row(i).transpose());
+    zr[i] = Eigen::Vector2d(c.height, c.distance);
     mean += data.weights[i] * zr[i];
   }
   mean /= total;
