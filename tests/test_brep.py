@@ -211,3 +211,23 @@ def test_cad_export_of_a_real_part_gives_its_solid(name):
     solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))
     assert solid.solid and solid.valid, solid.problems
     assert abs(solid.volume / part.Volume - 1) < 5e-3
+
+
+@needs_freecad
+@pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+@pytest.mark.parametrize("name, types", [
+    ("nist_ftc_11_asme1_rb.stp", {"plane": 2, "cylinder": 2, "torus": 2}),
+    # Of the STEP file's 14 cone faces, pairs lie on one cone (the file splits them at a seam).
+    ("occt_Pump_Nut.step", {"plane": 8, "cylinder": 1, "cone": 12, "torus": 2}),
+])
+def test_cad_export_of_coarse_tori_gives_the_parts_faces(name, types):
+    """Fillets of 1-1.5 mm on parts of 50-90 mm: the export crosses their tubes in a few facets
+    turning by up to 54° on the saddle, and segmentation cuts them into bands and single facets.
+    The solid has the part's surfaces and volume."""
+    _, Part, _ = shapes.freecad()
+    part = max(Part.read(str(SHARED_STEP / name)).Solids, key=lambda s: s.Volume)
+    V, F, _ = shapes.cad_export(part, 1e-3 * part.BoundBox.DiagonalLength, 0.35)
+    solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == types
+    assert abs(solid.volume / part.Volume - 1) < 5e-4

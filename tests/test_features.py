@@ -291,8 +291,18 @@ def box():
     return shapes.freecad()[1].makeBox(10, 20, 30)
 
 
+def filleted_ring(outer):
+    """A ring whose two top edges have fillets of 1.5: tori whose tubes a coarse export crosses in
+    a few facets, so that segmentation cuts them into bands (each a cone or sphere) and facets."""
+    _, Part, _ = shapes.freecad()
+    ring = Part.makeCylinder(outer, 8).cut(Part.makeCylinder(outer / 2, 8))
+    top = [e for e in ring.Edges if type(e.Curve).__name__ == "Circle" and e.Vertexes[0].Point.z > 7.9]
+    return ring.makeFillet(1.5, top)
+
+
 @needs_freecad
-@pytest.mark.parametrize("make", [plate_with_shallow_bosses, stepped_shaft, box])
+@pytest.mark.parametrize("make", [plate_with_shallow_bosses, stepped_shaft, box, lambda: filleted_ring(30),
+                                  lambda: filleted_ring(17.5)])
 @pytest.mark.parametrize("deflection", [(1e-3, 0.35), (3e-3, 0.5)])
 @pytest.mark.parametrize("offset", [0.0, 5000.0])
 def test_cad_export_gives_one_feature_per_face(make, deflection, offset):

@@ -5,7 +5,10 @@
 
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepBuilderAPI_Sewing.hxx>
+#include <BRepCheck.hxx>
 #include <BRepCheck_Analyzer.hxx>
+#include <BRepCheck_ListIteratorOfListOfStatus.hxx>
+#include <BRepCheck_Result.hxx>
 #include <BRepGProp.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
@@ -50,6 +53,7 @@
 #include <limits>
 #include <optional>
 #include <set>
+#include <sstream>
 
 namespace idealize {
 
@@ -500,12 +504,14 @@ std::vector<int> BrepBuilder::dissolve_sampling_blends(const TriangleMesh& mesh,
     }
   }
   if (edges.empty()) return labels;
-  // Exact tessellation: half or more of the features fit to rounding error.
+  // Exact tessellation: half or more of the features fit exactly, as the feature layer decides it
+  // (a CAD export's vertices may lie on a B-spline approximation of its tori, a few thousandths
+  // of the tolerance off the ideal surface).
   int exact = 0, fitted = 0;
   for (int i = 0; i < features; ++i) {
     if (count[i] == 0) continue;
     ++fitted;
-    exact += std::sqrt(squared[i] / count[i]) < 1e-3 * tol_;
+    exact += std::sqrt(squared[i] / count[i]) < kExactFraction * tol_;
   }
   if (2 * exact >= fitted) return labels;
   std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
@@ -771,6 +777,31 @@ const char* occt_surface_name(const TopoDS_Face& face) {
   }
 }
 
+// What BRepCheck finds wrong with an invalid face, first for the face itself, then for its wires,
+// edges and vertices ("SelfIntersectingWire", "BadOrientationOfSubshape", ...).
+std::string invalid_reason(const TopoDS_Shape& face) {
+  const BRepCheck_Analyzer analyzer(face);
+  for (const TopAbs_ShapeEnum type : {TopAbs_FACE, TopAbs_WIRE, TopAbs_EDGE, TopAbs_VERTEX}) {
+    for (TopExp_Explorer e(face, type); e.More(); e.Next()) {
+      const Handle(BRepCheck_Result) result = analyzer.Result(e.Current());
+      if (result.IsNull()) continue;
+      std::vector<const BRepCheck_ListOfStatus*> lists{&result->Status()};
+      for (result->InitContextIterator(); result->MoreShapeInContext(); result->NextShapeInContext())
+        lists.push_back(&result->StatusOnShape());
+      for (const BRepCheck_ListOfStatus* list : lists)
+        for (BRepCheck_ListIteratorOfListOfStatus it(*list); it.More(); it.Next())
+          if (it.Value() != BRepCheck_NoError) {
+            std::ostringstream name;
+            BRepCheck::Print(it.Value(), name);
+            std::string text = name.str();
+            text.erase(std::remove(text.begin(), text.end(), '\n'), text.end());
+            return text;
+          }
+    }
+  }
+  return "unknown";
+}
+
 // An edge used by one face only (seams, used twice by their face, and degenerate edges aside).
 bool has_free_edges(const TopoDS_Shape& shape) {
   TopTools_IndexedDataMapOfShapeListOfShape faces_of_edge;
@@ -922,9 +953,16 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
         builder.Add(kept_faces, e.Current());
       } else {
         const Handle(Geom_Surface) surface = BRep_Tool::Surface(TopoDS::Face(e.Current()));
+        const std::string message = "its face is not valid (" + invalid_reason(e.Current()) + ")";
+        bool found = false;
         for (int r = 0; r < regions; ++r) {
-          if (region_surfaces_[r] == surface) result.problems.push_back({topo_.region_feature[r], "its face is not valid"});
+          if (region_surfaces_[r] == surface) {
+            result.problems.push_back({topo_.region_feature[r], message});
+            found = true;
+          }
         }
+        // Healing may have put the face on a copy of its surface: still never dropped silently.
+        if (!found) result.problems.push_back({-1, std::string("a ") + occt_surface_name(TopoDS::Face(e.Current())) + " face: " + message.substr(4)});
       }
     }
     shape = kept_faces;

@@ -9,6 +9,10 @@ namespace idealize {
 
 enum class SurfaceType { Plane, Cylinder, Cone, Sphere, Torus, Freeform };
 
+// A fit is exact when its residual is below this fraction of the distance tolerance: the vertices of
+// a CAD tessellation lie on their faces (up to the file's float precision).
+constexpr double kExactFraction = 0.01;
+
 // Name used in reports: "plane", "cylinder", "cone", "sphere", "torus", "freeform".
 const char* surface_type_name(SurfaceType type);
 
