@@ -39,6 +39,38 @@ def solid_of(part, tolerance=0.05, noise=0.0):
     return layer, idealize.make_solid(layer)
 
 
+def drilled_block():
+    """A blind hole with a 118° drill point: a cone bounded by one circle and its apex."""
+    FreeCAD, Part, _ = shapes.freecad()
+    radius, depth = 5.0, 12.0
+    tip = radius / np.tan(np.radians(59))
+    hole = Part.makeCylinder(radius, depth, FreeCAD.Vector(20, 15, 20 - depth))
+    point = Part.makeCone(0, radius, tip, FreeCAD.Vector(20, 15, 20 - depth - tip))
+    return Part.makeBox(40, 30, 20).cut(hole.fuse(point)).removeSplitter()
+
+
+def ball_end_pocket():
+    """A pocket a ball-end mill leaves: a hemisphere bounded by one circle about its pole."""
+    FreeCAD, Part, _ = shapes.freecad()
+    cutter = Part.makeCylinder(6, 10, FreeCAD.Vector(20, 15, 10)).fuse(Part.makeSphere(6, FreeCAD.Vector(20, 15, 10)))
+    return Part.makeBox(40, 30, 20).cut(cutter).removeSplitter()
+
+
+@needs_freecad
+@pytest.mark.parametrize("make", [drilled_block, ball_end_pocket])
+@pytest.mark.parametrize("export", [False, True])
+def test_caps_about_an_apex_or_a_pole(make, export):
+    part = make()
+    if export:  # a CAD system's coarse STL export
+        V, F, _ = shapes.cad_export(part, 1e-3 * part.BoundBox.DiagonalLength, 0.35)
+    else:
+        V, F, _ = shapes.tessellate_with_faces(part, 0.05)
+    solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == surface_types(part)
+    assert solid.volume == pytest.approx(part.Volume, rel=1e-6)
+
+
 @needs_freecad
 @pytest.mark.parametrize("make", [box, box_with_hole, shapes.bracket_solid, countersink, spherical_dimple,
                                   torus_blend])
@@ -201,10 +233,12 @@ SHARED_STEP = Path(__file__).resolve().parents[2] / "shared" / "data" / "step"
 
 @needs_freecad
 @pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
-@pytest.mark.parametrize("name", ["as_bolt-colored-faces.stp", "as_isolated_blends_test_12.stp", "occt_mal_vis.step"])
+@pytest.mark.parametrize("name", ["as_bolt-colored-faces.stp", "as_isolated_blends_test_12.stp", "occt_mal_vis.step",
+                                  "nist_ctc_01_asme1_rd.stp", "as_bb_boxblend_03.stp"])
 def test_cad_export_of_a_real_part_gives_its_solid(name):
     """Real parts whose full cylindrical bands (a bolt's shank, cylinders a STEP file splits in
-    halves) bound their faces with whole circles: the solid closes, with the part's volume."""
+    halves) bound their faces with whole circles, with drill points (ctc_01) and slivers of two
+    triangles whose six corners a cone would fit: the solid closes, with the part's volume."""
     _, Part, _ = shapes.freecad()
     part = max(Part.read(str(SHARED_STEP / name)).Solids, key=lambda s: s.Volume)
     V, F, _ = shapes.cad_export(part, 1e-3 * part.BoundBox.DiagonalLength, 0.35)  # the benchmark's export

@@ -4,6 +4,7 @@
 #include "occt_signals.h"
 
 #include <BRepAdaptor_Surface.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_Sewing.hxx>
 #include <BRepCheck.hxx>
 #include <BRepCheck_Analyzer.hxx>
@@ -12,6 +13,7 @@
 #include <BRepGProp.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
+#include <ElSLib.hxx>
 #include <GProp_GProps.hxx>
 #include <GeomAPI_IntSS.hxx>
 #include <GeomAPI_PointsToBSpline.hxx>
@@ -450,6 +452,7 @@ class BrepBuilder {
   TopoDS_Vertex vertex_at_corner(int mesh_vertex) const { return vertices_.at(mesh_vertex); }
   void make_edges(BrepResult& result);
   void make_faces(BrepResult& result);
+  std::optional<TopoDS_Face> pole_cap(size_t region);
   TopoDS_Shape assemble(BrepResult& result, const BrepOptions& options);
 
   const TriangleMesh& mesh_;
@@ -460,6 +463,7 @@ class BrepBuilder {
   BoundaryTopology topo_;
   std::vector<Handle(Geom_Surface)> region_surfaces_;
   std::vector<double> region_sense_;  // +1 when the surface normal points out of the part
+  std::vector<Vec3> region_centroid_;  // mean of the region's triangle centroids
   std::map<int, TopoDS_Vertex> vertices_;
   std::map<int, Vec3> corner_points_;
   std::vector<TopoDS_Edge> edges_;
@@ -714,6 +718,52 @@ void BrepBuilder::make_edges(BrepResult& result) {
   }
 }
 
+// A cone or sphere bounded by one whole circle is a cap about its apex (a drill point) or pole (a
+// ball end): its face is the surface between the circle and that point, with the seam and the
+// degenerate edge there that a face built from the circle alone lacks. The sphere is placed with
+// its pole inside the cap. Sewing joins the cap's circle to the neighbour's.
+std::optional<TopoDS_Face> BrepBuilder::pole_cap(size_t region) {
+  const auto& loops = topo_.region_loops[region];
+  if (loops.size() != 1 || loops[0].size() != 1 || !topo_.chains[loops[0][0].chain].closed) return std::nullopt;
+  const TopoDS_Edge& edge = edges_[loops[0][0].chain];
+  double first, last;
+  const Handle(Geom_Circle) circle = Handle(Geom_Circle)::DownCast(BRep_Tool::Curve(edge, first, last));
+  if (circle.IsNull()) return std::nullopt;
+  // The surface's seam through the edge's vertex: the cap's circle then starts where the edge does,
+  // and sewing joins the two whole (it would cut both at each other's vertices).
+  const gp_Pnt start = BRep_Tool::Pnt(TopExp::FirstVertex(edge));
+  const gp_Dir seam = gp_Vec(circle->Location(), start);
+  Handle(Geom_Surface) placed;
+  double low, high;
+  if (const Handle(Geom_ConicalSurface) cone = Handle(Geom_ConicalSurface)::DownCast(region_surfaces_[region]);
+      !cone.IsNull()) {
+    const Handle(Geom_ConicalSurface) turned = new Geom_ConicalSurface(
+        gp_Ax3(cone->Location(), cone->Axis().Direction(), seam), cone->SemiAngle(), cone->RefRadius());
+    double u, v;
+    ElSLib::Parameters(turned->Cone(), start, u, v);
+    const double apex = -turned->RefRadius() / std::sin(turned->SemiAngle());
+    placed = turned;
+    low = std::min(apex, v);
+    high = std::max(apex, v);
+  } else if (const Handle(Geom_SphericalSurface) sphere = Handle(Geom_SphericalSurface)::DownCast(region_surfaces_[region]);
+             !sphere.IsNull()) {
+    gp_Dir pole = circle->Axis().Direction();
+    if (gp_Vec(circle->Location(), to_pnt(region_centroid_[region])).Dot(gp_Vec(pole)) < 0.0) pole.Reverse();
+    const Handle(Geom_SphericalSurface) turned = new Geom_SphericalSurface(gp_Ax3(sphere->Location(), pole, seam), sphere->Radius());
+    double u, v;
+    ElSLib::Parameters(turned->Sphere(), start, u, v);
+    placed = turned;
+    low = v;
+    high = 0.5 * M_PI;
+  } else {
+    return std::nullopt;
+  }
+  BRepBuilderAPI_MakeFace cap(placed, 0.0, 2.0 * M_PI, low, high, Precision::Confusion());
+  if (!cap.IsDone()) return std::nullopt;
+  region_surfaces_[region] = placed;  // faces map back to features by their surface
+  return cap.Face();
+}
+
 void BrepBuilder::make_faces(BrepResult& result) {
   BRep_Builder builder;
   const ProgressSpan progress = progress_.sub("faces", 0.8, 0.83);
@@ -732,10 +782,15 @@ void BrepBuilder::make_faces(BrepResult& result) {
       result.problems.push_back({feature, "the face has an edge that could not be made"});
       continue;
     }
+    const bool outward = region_sense_[r] > 0;
+    if (const std::optional<TopoDS_Face> cap = pole_cap(r)) {
+      faces_.push_back(outward ? *cap : TopoDS::Face(cap->Reversed()));
+      face_region_.push_back(static_cast<int>(r));
+      continue;
+    }
     try {
       TopoDS_Face face;
       builder.MakeFace(face, region_surfaces_[r], Precision::Confusion());
-      const bool outward = region_sense_[r] > 0;
       for (const auto& loop : topo_.region_loops[r]) {
         if (std::all_of(loop.begin(), loop.end(), [&](const ChainUse& use) { return collapsed_[use.chain] != 0; }))
           continue;
@@ -916,6 +971,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   const int regions = static_cast<int>(topo_.region_feature.size());
   std::vector<std::vector<Vec3>> region_points(regions);
   region_sense_.assign(regions, 0.0);
+  region_centroid_.assign(regions, Vec3::Zero());
   for (int f = 0; f < clean.num_faces(); ++f) {
     const int r = topo_.face_region[f];
     const Vec3 a = clean.V.row(clean.F(f, 0)), b = clean.V.row(clean.F(f, 1)), c = clean.V.row(clean.F(f, 2));
@@ -927,6 +983,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   }
   region_surfaces_.resize(regions);
   for (int r = 0; r < regions; ++r) {
+    for (const Vec3& p : region_points[r]) region_centroid_[r] += p / static_cast<double>(region_points[r].size());
     region_surfaces_[r] = make_surface(surfaces_[topo_.region_feature[r]], region_points[r]);
   }
   progress_.sub("vertices", 0.0, 1.0).step(0.5);

@@ -485,6 +485,9 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
         }
         return true;
       }
+      // Exact only with a point more than the surface's parameters fit anyway (the six vertices of
+      // two creased quads lie on three lines through a point, and so on a cone).
+      if (distinct_points(both) <= parameter_count(u.type)) return false;
       // As much normal spread as the parts have is allowed, plus the floor (and the facets' chords).
       const double angle = 3.0 * std::max(fa.normal_spread, fb.normal_spread) + normal_floor;
       const double chord_turn = larger_small ? kFewPointsChordTurn : kLargestFacetTurn;
