@@ -56,6 +56,15 @@ def ball_end_pocket():
     return Part.makeBox(40, 30, 20).cut(cutter).removeSplitter()
 
 
+def bevelled_bore():
+    """A bore through a block whose top is bevelled at 30°: the oblique plane cuts it in an ellipse."""
+    FreeCAD, Part, _ = shapes.freecad()
+    block = Part.makeBox(60, 40, 30).cut(Part.makeCylinder(8, 30, FreeCAD.Vector(30, 20, 0)))
+    keep = Part.makeBox(100, 100, 100, FreeCAD.Vector(-20, -30, 0))
+    keep.rotate(FreeCAD.Vector(0, 0, 18), FreeCAD.Vector(0, 1, 0), -30)
+    return block.common(keep).removeSplitter()
+
+
 @needs_freecad
 @pytest.mark.parametrize("make", [drilled_block, ball_end_pocket])
 @pytest.mark.parametrize("export", [False, True])
@@ -73,7 +82,7 @@ def test_caps_about_an_apex_or_a_pole(make, export):
 
 @needs_freecad
 @pytest.mark.parametrize("make", [box, box_with_hole, shapes.bracket_solid, countersink, spherical_dimple,
-                                  torus_blend])
+                                  torus_blend, bevelled_bore])
 def test_round_trip_of_analytic_parts(make, tmp_path):
     part = make()
     layer, solid = solid_of(part)

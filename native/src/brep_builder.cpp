@@ -23,6 +23,7 @@
 #include <Geom_Circle.hxx>
 #include <Geom_ConicalSurface.hxx>
 #include <Geom_CylindricalSurface.hxx>
+#include <Geom_Ellipse.hxx>
 #include <Geom_Line.hxx>
 #include <Geom_Plane.hxx>
 #include <Geom_SphericalSurface.hxx>
@@ -260,6 +261,10 @@ Vec2 nearest(const std::vector<Vec2>& candidates, const Vec2& reference) {
   });
 }
 
+// sin(5 degrees): directions this close count as parallel when an exact closed form is not found
+// (the feature graph's parallel tolerance).
+constexpr double kNearlyParallel = 0.0872;
+
 Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const std::vector<Vec3>& points,
                                      double angle_eps, double tol) {
   if (a.type == SurfaceType::Plane && b.type == SurfaceType::Plane) {
@@ -301,6 +306,17 @@ Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const s
     const Vec3 dir = cyl.axis;
     const bool parallel = other.type == SurfaceType::Plane ? std::abs(other.axis.dot(dir)) <= angle_eps
                                                            : other.axis.cross(dir).norm() <= angle_eps;
+    const Vec3& n = other.axis;
+    const double cosine = n.dot(dir);
+    if (other.type == SurfaceType::Plane && std::abs(cosine) > kNearlyParallel && n.cross(dir).norm() > kNearlyParallel) {
+      // An oblique plane cuts the cylinder in an ellipse about the point where the axis crosses it:
+      // the radius across the tilt, stretched by the tilt along it. (A plane nearly parallel to
+      // the axis touches it along a line, one nearly square to it cuts a circle: the second pass's
+      // closed forms.)
+      const Vec3 centre = cyl.point + (n.dot(other.point - cyl.point) / cosine) * dir;
+      const Vec3 across = dir.cross(n).normalized(), along = n.cross(across);
+      return new Geom_Ellipse(gp_Ax2(to_pnt(centre), to_dir(n), to_dir(along)), cyl.radius / std::abs(cosine), cyl.radius);
+    }
     if (!parallel) return nullptr;
     Vec3 e1, e2;
     orthonormal_frame(dir, e1, e2);
@@ -342,10 +358,6 @@ double curve_parameter(const Handle(Geom_Curve)& curve, const Vec3& p) {
   }
   return parameter;
 }
-
-// sin(5 degrees): directions this close count as parallel when an exact closed form is not found
-// (the feature graph's parallel tolerance).
-constexpr double kNearlyParallel = 0.0872;
 
 double max_distance_to_curve(const Handle(Geom_Curve)& curve, const std::vector<Vec3>& points) {
   double worst = 0.0;
