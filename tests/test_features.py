@@ -1,4 +1,7 @@
 """The feature layer: surface fits, typed features of CAD parts and scans, relations, projection."""
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -368,6 +371,29 @@ def test_noisy_fillets_meeting_in_a_corner_ball(seed):
         assert f["type"] == "cylinder" and abs(f["params"]["radius"] / 2.5 - 1) < 0.03, f
 
 
+SHARED_STEP = Path(__file__).resolve().parents[2] / "shared" / "data" / "step"
+
+
+@needs_freecad
+@pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+def test_fillets_of_the_benchmarks_blended_corner_scan():
+    """The benchmark's scan of as_boxblend_04 (fillets of a fifth of the cube, meeting in a ball):
+    across the first disc grown on one fillet its surface bends by less than the noise, and the fit
+    was a cylinder of 600 times the radius that grew into a flat strip (the fillet ended as three
+    planes). Each fillet is one cylinder of the part's radius."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+    import datasets
+    m = datasets.load_part(SHARED_STEP / "as_boxblend_04.step", ["scan"], log=lambda *_: None)[0]
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    areas = shapes.triangle_areas(m.V, m.F)
+    fillets = [face for face, kind in enumerate(m.face_types) if kind == "Cylinder"]
+    assert len(fillets) == 3
+    for face, f in zip(fillets, np.array(dominant(layer, m.gt, areas), dtype=object)[fillets]):
+        assert f["type"] == "cylinder" and abs(f["params"]["radius"] / 0.2 - 1) < 0.01, (face, f)
+        inside = m.gt == face
+        assert areas[inside & (layer.labels == f["id"])].sum() >= 0.8 * areas[inside].sum()
+
+
 @needs_freecad
 @pytest.mark.parametrize("seed", [2, 3])
 def test_noisy_hexagon_nut(seed):
@@ -380,7 +406,7 @@ def test_noisy_hexagon_nut(seed):
     V = shapes.normal_noise(V, F, diag, seed)
     layer = idealize.idealize(idealize.Mesh(V, F))
     areas = shapes.triangle_areas(V, F)
-    assert correct_faces(layer.labels, gt, areas) >= 13  # of 23 (14-17 over seeds 1-6): flats, ends, bore, most pieces
+    assert correct_faces(layer.labels, gt, areas) >= 13  # of 23 (13-17 over seeds 1-6): flats, ends, bore, most pieces
     found = dominant(layer, gt, areas)
     flats = [f for face, f in zip(solid.Faces, found)
              if type(face.Surface).__name__ == "Plane" and abs(face.normalAt(0, 0).z) < 0.1]

@@ -687,6 +687,21 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
   return label_remainder(topology, faces, patch, first, open, labels, next_id, progress);
 }
 
+// How far `surface` bends away from the plane of `data` across its points: the spread of its
+// distances from their projections on that plane (zero for a plane).
+double bend(const Surface& surface, const FitData& data) {
+  const SurfaceFit plane = fit_surface(SurfaceType::Plane, data);
+  if (!plane.valid || surface.type == SurfaceType::Plane) return 0.0;
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+  for (Eigen::Index i = 0; i < data.points.rows(); ++i) {
+    const Eigen::Vector3d p = data.points.row(i).transpose();
+    const double d = signed_distance(surface, p - signed_distance(plane.surface, p) * plane.surface.axis);
+    low = std::min(low, d);
+    high = std::max(high, d);
+  }
+  return high - low;
+}
+
 // Splits a noisy patch that no single surface fits into regions that one surface each fits: a chain
 // of blends of one radius (cylinder, torus, cylinder) has one mean curvature, so the histogram
 // cannot tell its members apart. From the face deepest inside the patch, a disc of faces is
@@ -732,27 +747,48 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
   auto all_points = [&](const std::vector<int>& region_faces) {
     return face_points(mesh, region_faces.data(), static_cast<int>(region_faces.size()), slot, [](int) { return false; });
   };
-  long long visited = 0;
-  for (int seed : seeds) {
-    if (labels[seed] != patch || tried[seed]) continue;
-    // The disc: the nearest faces of the patch that no region took.
+  // The disc: the nearest `size` faces of the patch from `seed` that no region took.
+  auto disc = [&](int seed, int size) {
     std::vector<int> region{seed};
     in_region[seed] = 1;
-    for (size_t head = 0; head < region.size() && static_cast<int>(region.size()) < disc_faces; ++head)
-      for (int c = 0; c < 3 && static_cast<int>(region.size()) < disc_faces; ++c) {
+    for (size_t head = 0; head < region.size() && static_cast<int>(region.size()) < size; ++head)
+      for (int c = 0; c < 3 && static_cast<int>(region.size()) < size; ++c) {
         const int g = topology.face_neighbor(region[head], c);
         if (g >= 0 && labels[g] == patch && !in_region[g]) {
           in_region[g] = 1;
           region.push_back(g);
         }
       }
-    for (int f : region) tried[f] = 1;
+    for (int f : region) in_region[f] = 0;
+    return region;
+  };
+  auto fits = [&](const Feature& f) { return f.type != SurfaceType::Freeform && f.rms <= fits_below; };
+  long long visited = 0;
+  for (int seed : seeds) {
+    if (labels[seed] != patch || tried[seed]) continue;
+    std::vector<int> region = disc(seed, disc_faces);
     Feature feature;
     if (static_cast<int>(region.size()) == disc_faces) feature = identify_points(all_points(region));
-    if (static_cast<int>(region.size()) < disc_faces || feature.type == SurfaceType::Freeform || feature.rms > fits_below) {
-      for (int f : region) in_region[f] = 0;
+    if (static_cast<int>(region.size()) < disc_faces || !fits(feature)) {
+      for (int f : region) tried[f] = 1;
       continue;
     }
+    // Across a disc on a narrow fillet the surface may bend by less than the noise: the fit is then
+    // any surface of little curvature (a cylinder of a hundred times the radius, which grows along
+    // the fillet as a flat strip). A larger disc replaces it if its surface fits it and bends by
+    // more than the noise; the disc doubles while it still fits.
+    const bool flat = bend(feature.surface, all_points(region)) < noise;
+    for (int size = 2 * disc_faces; flat && size <= static_cast<int>(faces.size()); size *= 2) {
+      std::vector<int> larger = disc(seed, size);
+      const FitData larger_points = all_points(larger);
+      const Feature wider = identify_points(larger_points);
+      if (!fits(wider) || wider.rms > std::max(feature.rms, noise)) break;  // it reached another surface
+      if (bend(wider.surface, larger_points) < noise) continue;
+      region = std::move(larger);
+      feature = wider;
+      break;
+    }
+    for (int f : region) tried[f] = in_region[f] = 1;
     size_t fitted = region.size();
     auto explains = [&](int g) {
       return face_misfit(mesh, g, feature.surface, 3.0 * std::max(noise, feature.spread),
