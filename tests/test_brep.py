@@ -274,3 +274,18 @@ def test_cad_export_of_coarse_tori_gives_the_parts_faces(name, types):
     assert solid.solid and solid.valid, solid.problems
     assert solid.surface_types == types
     assert abs(solid.volume / part.Volume - 1) < 5e-4
+
+
+@needs_freecad
+@pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+def test_cad_export_of_corner_balls_gives_spheres():
+    """Three boxes blended with fillets of 0.1-0.4 mm meeting in balls: the export's coarse facets of
+    a ball also lie on a wide cone, and a ball that became a cone left two flat strips of a fillet
+    beside it. The solid has the part's surfaces and volume."""
+    _, Part, _ = shapes.freecad()
+    part = max(Part.read(str(SHARED_STEP / "as_3boxesblend_05.step")).Solids, key=lambda s: s.Volume)
+    V, F, _ = shapes.cad_export(part, 1e-3 * part.BoundBox.DiagonalLength, 0.35)
+    solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == surface_types(part)
+    assert abs(solid.volume / part.Volume - 1) < 5e-4

@@ -45,11 +45,12 @@ constexpr double kLargestFacetTurn = 0.25 * M_PI;
 // small pieces fix, only up to half of it: the sides and chamfers of a hexagon lie on a torus.
 constexpr double kFewPointsChordTurn = 0.5 * kLargestFacetTurn;
 
-// The surface types in the order a designer models them (thesis 4.3), which is also the order of
-// preference when several fit: a short band of a large sphere fits as well as the cylinder it
-// usually is.
+// The order of preference when several surface types fit: the fewest parameters first, but a short
+// band of a large sphere fits as well as the cylinder it usually is. A sphere precedes the cone
+// (thesis 4.3 models cones first): a zone of a sphere, such as a ball between three fillets or the
+// coarse facets of a CAD export's corner, also fits a wide cone.
 constexpr std::array<SurfaceType, 5> kTypesByPreference = {SurfaceType::Plane, SurfaceType::Cylinder,
-                                                           SurfaceType::Cone, SurfaceType::Sphere,
+                                                           SurfaceType::Sphere, SurfaceType::Cone,
                                                            SurfaceType::Torus};
 
 using PatchPoints = FitData;
