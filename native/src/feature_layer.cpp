@@ -446,33 +446,44 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     const PatchPoints &pa = points[a], &pb = points[b];
     const bool a_small = pa.points.rows() < kInteriorPoints, b_small = pb.points.rows() < kInteriorPoints;
     const bool same_type = fa.type == fb.type && fa.type != SurfaceType::Freeform;
-    // On an exact tessellation the larger surface may also take a neighbour of another type that it
-    // explains exactly: a coarse torus falls into bands between its meridians, each of which a
-    // cylinder or cone fits exactly.
-    if (!same_type && !a_small && !b_small && !exact) continue;
     const Feature& larger = pa.weights.sum() >= pb.weights.sum() ? fa : fb;
     const bool larger_small = &larger == &fa ? a_small : b_small;
     const double limit = options.residual_ratio * std::max(fa.rms, fb.rms) + kExactFraction * tolerance;
     const double normal_limit = options.residual_ratio * std::max(fa.normal_rms, fb.normal_rms) + normal_floor;
-    // On an exact tessellation, a surface that the vertices of a large patch fix takes the
-    // neighbours it explains as it is, several in one call (the fragments along a coarse torus),
-    // when the normals of both together fit it as a merge would require.
-    if (exact && !larger_small && larger.type != SurfaceType::Freeform) {
+    // A surface that the vertices of a large patch fix takes the neighbours it explains as it is,
+    // several in one call: on an exact tessellation when it explains every point and the normals of
+    // both together fit it as a merge would require (the fragments along a coarse torus); on a
+    // noisy one a curved surface takes a large neighbour of another type that it fits about as well
+    // as the neighbour's own surface (a zone of a torus that a sphere fits).
+    const bool noisy_other_type = !exact && !same_type && !a_small && !b_small && larger.type != SurfaceType::Plane;
+    if ((exact || noisy_other_type) && !larger_small && larger.type != SurfaceType::Freeform) {
       const PatchPoints& own = &larger == &fa ? pa : pb;
       const PatchPoints& other = &larger == &fa ? pb : pa;
       SurfaceFit piece;
       piece.surface = larger.surface;
       measure_spreads(other, piece);
-      const double w_own = own.sample_weights.sum(), w_other = other.sample_weights.sum();
-      const double normal_rms = std::sqrt((w_own * larger.normal_rms * larger.normal_rms +
-                                           w_other * piece.normal_rms * piece.normal_rms) / (w_own + w_other));
-      const double angle = 3.0 * std::max(fa.normal_spread, fb.normal_spread) + normal_floor;
-      if (normal_rms <= normal_limit &&
-          explains_every_point(larger.surface, other, exact_distance, angle, kLargestFacetTurn)) {
+      bool explained;
+      if (exact) {
+        const double w_own = own.sample_weights.sum(), w_other = other.sample_weights.sum();
+        const double normal_rms = std::sqrt((w_own * larger.normal_rms * larger.normal_rms +
+                                             w_other * piece.normal_rms * piece.normal_rms) / (w_own + w_other));
+        const double angle = 3.0 * std::max(fa.normal_spread, fb.normal_spread) + normal_floor;
+        explained = normal_rms <= normal_limit &&
+                    explains_every_point(larger.surface, other, exact_distance, angle, kLargestFacetTurn);
+      } else {
+        double rms, max_error;
+        fit_residuals(larger.surface, other.points, other.weights, rms, max_error);
+        const Feature& other_feature = &larger == &fa ? fb : fa;
+        explained = rms <= options.residual_ratio * std::max(other_feature.rms, noise) && piece.normal_rms <= normal_limit;
+      }
+      if (explained) {
         absorbed.push_back({&larger == &fa ? a : b, &larger == &fa ? b : a});
         continue;
       }
     }
+    // Two large patches of different types make one surface only on an exact tessellation: a coarse
+    // torus falls into bands between its meridians, each of which a cylinder or cone fits exactly.
+    if (!same_type && !a_small && !b_small && !exact) continue;
     const PatchPoints both = concatenate(pa, pb);
     auto accepted = [&](const Feature& u) {
       if (u.type == SurfaceType::Freeform || u.rms > limit || u.normal_rms > normal_limit) return false;
