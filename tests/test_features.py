@@ -395,6 +395,26 @@ def test_fillets_of_the_benchmarks_blended_corner_scan():
 
 
 @needs_freecad
+@pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+def test_chamfer_pieces_of_the_benchmarks_sculpted_nut_are_coaxial_cones():
+    """The benchmark's sculpted occt_Pump_Nut: a narrow piece of the chamfer cone fits a sphere as
+    well as its cone, and identification prefers spheres to cones; about the bore's axis only the
+    cone fits, so every piece is a cone on that axis."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+    import datasets
+    m = datasets.load_part(SHARED_STEP / "occt_Pump_Nut.step", ["sculpt"], log=lambda *_: None)[0]
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    areas = shapes.triangle_areas(m.V, m.F)
+    found = dominant(layer, m.gt, areas)
+    bore = max((f for f in layer.features if f["type"] == "cylinder"), key=lambda f: f["area"])
+    pieces = [found[face] for face, kind in enumerate(m.face_types) if kind == "Cone" and found[face] is not None]
+    assert len(pieces) == 12  # of 14 cone faces: two slivers of the STEP file hold no triangle
+    for f in pieces:
+        assert f["type"] == "cone", f
+        assert axis_angle(f["params"]["axis"], bore["params"]["axis"]) < np.radians(0.5), f
+
+
+@needs_freecad
 @pytest.mark.parametrize("seed", [2, 3])
 def test_noisy_hexagon_nut(seed):
     """A scanned hexagon nut: each of the twelve chamfer pieces is a narrow band of a cone that a

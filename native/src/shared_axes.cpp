@@ -68,11 +68,11 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
   for (size_t f = 0; f < features.size(); ++f) {
     Feature& feature = features[f];
     const FitData& data = points[f];
-    const bool plane = feature.type == SurfaceType::Plane;
-    if (!plane && feature.type != SurfaceType::Cylinder && feature.type != SurfaceType::Cone) continue;
+    const bool plane = feature.type == SurfaceType::Plane, sphere = feature.type == SurfaceType::Sphere;
+    if (!plane && !sphere && feature.type != SurfaceType::Cylinder && feature.type != SurfaceType::Cone) continue;
     if (data.points.rows() < 2 * parameter_count(feature.type)) continue;
     // One of the part's axes already: idealization aligns it.
-    if (!plane && std::any_of(axes.begin(), axes.end(), [&](const Axis& a) { return same_axis(feature.surface, a, options); }))
+    if (!plane && !sphere && std::any_of(axes.begin(), axes.end(), [&](const Axis& a) { return same_axis(feature.surface, a, options); }))
       continue;
     // Candidates by RMS (cheap); the spreads decide for the best one.
     const double rms_limit = plane ? feature.rms : options.residual_ratio * feature.rms + options.distance_tolerance;

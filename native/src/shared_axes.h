@@ -26,10 +26,10 @@ struct SharedAxisOptions {
   double normal_floor = 2.0 * 3.14159265358979323846 / 180.0;
 };
 
-// Refits the planes, cylinders and cones of `features` (`points`: what the fits see of each, by
-// feature id) about the determined axes of the part's other features. A cylinder or cone whose own
-// axis is none of them takes the coaxial cylinder or cone that fits as well as its own surface
-// (the one of least spread). A plane takes one only where its points fit it better than the plane
+// Refits the planes, spheres, cylinders and cones of `features` (`points`: what the fits see of
+// each, by feature id) about the determined axes of the part's other features. A cylinder or cone
+// whose own axis is none of them, or a sphere (a narrow band of a cone fits one as well), takes the
+// coaxial cylinder or cone that fits as well as its own surface (the one of least spread). A plane takes one only where its points fit it better than the plane
 // (and its normals as well) and it turns across the patch by more than the angle tolerance.
 // Returns the number of features that changed.
 int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOptions& options,
