@@ -304,10 +304,9 @@ Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const s
     const Surface& cyl = a_cyl ? a : b;
     const Surface& other = a_cyl ? b : a;
     const Vec3 dir = cyl.axis;
-    const bool parallel = other.type == SurfaceType::Plane ? std::abs(other.axis.dot(dir)) <= angle_eps
-                                                           : other.axis.cross(dir).norm() <= angle_eps;
     const Vec3& n = other.axis;
     const double cosine = n.dot(dir);
+    const bool parallel = other.type == SurfaceType::Plane ? std::abs(cosine) <= angle_eps : n.cross(dir).norm() <= angle_eps;
     if (other.type == SurfaceType::Plane && std::abs(cosine) > kNearlyParallel && n.cross(dir).norm() > kNearlyParallel) {
       // An oblique plane cuts the cylinder in an ellipse about the point where the axis crosses it:
       // the radius across the tilt, stretched by the tilt along it. (A plane nearly parallel to

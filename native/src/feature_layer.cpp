@@ -446,8 +446,10 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     const PatchPoints &pa = points[a], &pb = points[b];
     const bool a_small = pa.points.rows() < kInteriorPoints, b_small = pb.points.rows() < kInteriorPoints;
     const bool same_type = fa.type == fb.type && fa.type != SurfaceType::Freeform;
-    const Feature& larger = pa.weights.sum() >= pb.weights.sum() ? fa : fb;
-    const bool larger_small = &larger == &fa ? a_small : b_small;
+    const bool a_larger = pa.weights.sum() >= pb.weights.sum();
+    const Feature &larger = a_larger ? fa : fb, &smaller = a_larger ? fb : fa;
+    const PatchPoints &larger_points = a_larger ? pa : pb, &smaller_points = a_larger ? pb : pa;
+    const bool larger_small = a_larger ? a_small : b_small;
     const double limit = options.residual_ratio * std::max(fa.rms, fb.rms) + kExactFraction * tolerance;
     const double normal_limit = options.residual_ratio * std::max(fa.normal_rms, fb.normal_rms) + normal_floor;
     // A surface that the vertices of a large patch fix takes the neighbours it explains as it is,
@@ -457,27 +459,24 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     // as the neighbour's own surface (a zone of a torus that a sphere fits).
     const bool noisy_other_type = !exact && !same_type && !a_small && !b_small && larger.type != SurfaceType::Plane;
     if ((exact || noisy_other_type) && !larger_small && larger.type != SurfaceType::Freeform) {
-      const PatchPoints& own = &larger == &fa ? pa : pb;
-      const PatchPoints& other = &larger == &fa ? pb : pa;
       SurfaceFit piece;
       piece.surface = larger.surface;
-      measure_spreads(other, piece);
+      measure_spreads(smaller_points, piece);
       bool explained;
       if (exact) {
-        const double w_own = own.sample_weights.sum(), w_other = other.sample_weights.sum();
-        const double normal_rms = std::sqrt((w_own * larger.normal_rms * larger.normal_rms +
-                                             w_other * piece.normal_rms * piece.normal_rms) / (w_own + w_other));
+        const double w_larger = larger_points.sample_weights.sum(), w_smaller = smaller_points.sample_weights.sum();
+        const double normal_rms = std::sqrt((w_larger * larger.normal_rms * larger.normal_rms +
+                                             w_smaller * piece.normal_rms * piece.normal_rms) / (w_larger + w_smaller));
         const double angle = 3.0 * std::max(fa.normal_spread, fb.normal_spread) + normal_floor;
         explained = normal_rms <= normal_limit &&
-                    explains_every_point(larger.surface, other, exact_distance, angle, kLargestFacetTurn);
+                    explains_every_point(larger.surface, smaller_points, exact_distance, angle, kLargestFacetTurn);
       } else {
         double rms, max_error;
-        fit_residuals(larger.surface, other.points, other.weights, rms, max_error);
-        const Feature& other_feature = &larger == &fa ? fb : fa;
-        explained = rms <= options.residual_ratio * std::max(other_feature.rms, noise) && piece.normal_rms <= normal_limit;
+        fit_residuals(larger.surface, smaller_points.points, smaller_points.weights, rms, max_error);
+        explained = rms <= options.residual_ratio * std::max(smaller.rms, noise) && piece.normal_rms <= normal_limit;
       }
       if (explained) {
-        absorbed.push_back({&larger == &fa ? a : b, &larger == &fa ? b : a});
+        absorbed.push_back({a_larger ? a : b, a_larger ? b : a});
         continue;
       }
     }
@@ -779,8 +778,9 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
   for (int seed : seeds) {
     if (labels[seed] != patch || tried[seed]) continue;
     std::vector<int> region = disc(seed, disc_faces);
+    const FitData disc_points = all_points(region);
     Feature feature;
-    if (static_cast<int>(region.size()) == disc_faces) feature = identify_points(all_points(region));
+    if (static_cast<int>(region.size()) == disc_faces) feature = identify_points(disc_points);
     if (static_cast<int>(region.size()) < disc_faces || !fits(feature)) {
       for (int f : region) tried[f] = 1;
       continue;
@@ -789,7 +789,7 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
     // any surface of little curvature (a cylinder of a hundred times the radius, which grows along
     // the fillet as a flat strip). A larger disc replaces it if its surface fits it and bends by
     // more than the noise; the disc doubles while it still fits.
-    const bool flat = bend(feature.surface, all_points(region)) < noise;
+    const bool flat = bend(feature.surface, disc_points) < noise;
     for (int size = 2 * disc_faces; flat && size <= static_cast<int>(faces.size()); size *= 2) {
       std::vector<int> larger = disc(seed, size);
       const FitData larger_points = all_points(larger);
