@@ -1,7 +1,13 @@
 """Analytic test meshes made with numpy, and CAD parts made with FreeCAD (when available)."""
 import sys
+from pathlib import Path
 
 import numpy as np
+import pytest
+
+# The real parts of ../shared/data, beside the repository (never copied into it).
+SHARED_STEP = Path(__file__).resolve().parents[2] / "shared" / "data" / "step"
+needs_shared_data = pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
 
 
 def icosphere(radius=1.0, subdivisions=4):
@@ -168,3 +174,19 @@ def cad_export(solid, linear, angular):
 def triangle_areas(V, F):
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+
+
+def shared_part(name):
+    """The largest solid of the STEP part `name` in ../shared/data/step."""
+    _, Part, _ = freecad()
+    return max(Part.read(str(SHARED_STEP / name)).Solids, key=lambda s: s.Volume)
+
+
+def benchmark_mesh(name, variant):
+    """The benchmark's `variant` ("cad", "scan" or "sculpt") of the STEP part `name`, made (and
+    cached) by bench/datasets.py: a mesh with V, F, gt (B-rep face per triangle) and face_types."""
+    bench = str(Path(__file__).resolve().parents[1] / "bench")
+    if bench not in sys.path:
+        sys.path.insert(0, bench)
+    import datasets
+    return datasets.load_part(SHARED_STEP / name, [variant], log=lambda *_: None)[0]

@@ -1,7 +1,4 @@
 """The fitted B-rep (issue 4): analytic parts round-trip mesh -> feature layer -> solid -> STEP."""
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -238,27 +235,28 @@ def test_document_objects_without_gui(tmp_path):
         FreeCAD.closeDocument(doc.Name)
 
 
-SHARED_STEP = Path(__file__).resolve().parents[2] / "shared" / "data" / "step"
+def solid_of_export(part):
+    """The solid made from the STL export the benchmark gives a part (0.1 % of its diagonal, 0.35 rad)."""
+    V, F, _ = shapes.cad_export(part, 1e-3 * part.BoundBox.DiagonalLength, 0.35)
+    return idealize.make_solid(idealize.idealize(Mesh(V, F)))
 
 
 @needs_freecad
-@pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+@shapes.needs_shared_data
 @pytest.mark.parametrize("name", ["as_bolt-colored-faces.stp", "as_isolated_blends_test_12.stp", "occt_mal_vis.step",
                                   "nist_ctc_01_asme1_rd.stp", "as_bb_boxblend_03.stp"])
 def test_cad_export_of_a_real_part_gives_its_solid(name):
     """Real parts whose full cylindrical bands (a bolt's shank, cylinders a STEP file splits in
     halves) bound their faces with whole circles, with drill points (ctc_01) and slivers of two
     triangles whose six corners a cone would fit: the solid closes, with the part's volume."""
-    _, Part, _ = shapes.freecad()
-    part = max(Part.read(str(SHARED_STEP / name)).Solids, key=lambda s: s.Volume)
-    V, F, _ = shapes.cad_export(part, 1e-3 * part.BoundBox.DiagonalLength, 0.35)  # the benchmark's export
-    solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))
+    part = shapes.shared_part(name)
+    solid = solid_of_export(part)
     assert solid.solid and solid.valid, solid.problems
     assert abs(solid.volume / part.Volume - 1) < 5e-3
 
 
 @needs_freecad
-@pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+@shapes.needs_shared_data
 @pytest.mark.parametrize("name, types", [
     ("nist_ftc_11_asme1_rb.stp", {"plane": 2, "cylinder": 2, "torus": 2}),
     # Of the STEP file's 14 cone faces, pairs lie on one cone (the file splits them at a seam).
@@ -268,42 +266,34 @@ def test_cad_export_of_coarse_tori_gives_the_parts_faces(name, types):
     """Fillets of 1-1.5 mm on parts of 50-90 mm: the export crosses their tubes in a few facets
     turning by up to 54° on the saddle, and segmentation cuts them into bands and single facets.
     The solid has the part's surfaces and volume."""
-    _, Part, _ = shapes.freecad()
-    part = max(Part.read(str(SHARED_STEP / name)).Solids, key=lambda s: s.Volume)
-    V, F, _ = shapes.cad_export(part, 1e-3 * part.BoundBox.DiagonalLength, 0.35)
-    solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))
+    part = shapes.shared_part(name)
+    solid = solid_of_export(part)
     assert solid.solid and solid.valid, solid.problems
     assert solid.surface_types == types
     assert abs(solid.volume / part.Volume - 1) < 5e-4
 
 
 @needs_freecad
-@pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+@shapes.needs_shared_data
 def test_cad_export_of_corner_balls_gives_spheres():
     """Three boxes blended with fillets of 0.1-0.4 mm meeting in balls: the export's coarse facets of
     a ball also lie on a wide cone, and a ball that became a cone left two flat strips of a fillet
     beside it. The solid has the part's surfaces and volume."""
-    _, Part, _ = shapes.freecad()
-    part = max(Part.read(str(SHARED_STEP / "as_3boxesblend_05.step")).Solids, key=lambda s: s.Volume)
-    V, F, _ = shapes.cad_export(part, 1e-3 * part.BoundBox.DiagonalLength, 0.35)
-    solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))
+    part = shapes.shared_part("as_3boxesblend_05.step")
+    solid = solid_of_export(part)
     assert solid.solid and solid.valid, solid.problems
     assert solid.surface_types == surface_types(part)
     assert abs(solid.volume / part.Volume - 1) < 5e-4
 
 
 @needs_freecad
-@pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+@shapes.needs_shared_data
 def test_scan_of_a_domed_screw_head_gives_its_solid():
     """The benchmark's scan of occt_mal_vis: the flat outer zone of the head's torus fitted a large
     sphere as well, and stayed a face of its own that could not close. The torus takes it; the solid
     has the part's surfaces and volume."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
-    import datasets
-    _, Part, _ = shapes.freecad()
-    path = SHARED_STEP / "occt_mal_vis.step"
-    m = datasets.load_part(path, ["scan"], log=lambda *_: None)[0]
-    part = max(Part.read(str(path)).Solids, key=lambda s: s.Volume)
+    m = shapes.benchmark_mesh("occt_mal_vis.step", "scan")
+    part = shapes.shared_part("occt_mal_vis.step")
     solid = idealize.make_solid(idealize.idealize(Mesh(m.V, m.F)))
     assert solid.solid and solid.valid, solid.problems
     assert solid.surface_types == surface_types(part)

@@ -1,7 +1,4 @@
 """The feature layer: surface fits, typed features of CAD parts and scans, relations, projection."""
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -371,19 +368,14 @@ def test_noisy_fillets_meeting_in_a_corner_ball(seed):
         assert f["type"] == "cylinder" and abs(f["params"]["radius"] / 2.5 - 1) < 0.03, f
 
 
-SHARED_STEP = Path(__file__).resolve().parents[2] / "shared" / "data" / "step"
-
-
 @needs_freecad
-@pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+@shapes.needs_shared_data
 def test_fillets_of_the_benchmarks_blended_corner_scan():
     """The benchmark's scan of as_boxblend_04 (fillets of a fifth of the cube, meeting in a ball):
     across the first disc grown on one fillet its surface bends by less than the noise, and the fit
     was a cylinder of 600 times the radius that grew into a flat strip (the fillet ended as three
     planes). Each fillet is one cylinder of the part's radius."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
-    import datasets
-    m = datasets.load_part(SHARED_STEP / "as_boxblend_04.step", ["scan"], log=lambda *_: None)[0]
+    m = shapes.benchmark_mesh("as_boxblend_04.step", "scan")
     layer = idealize.idealize(idealize.Mesh(m.V, m.F))
     areas = shapes.triangle_areas(m.V, m.F)
     fillets = [face for face, kind in enumerate(m.face_types) if kind == "Cylinder"]
@@ -395,14 +387,12 @@ def test_fillets_of_the_benchmarks_blended_corner_scan():
 
 
 @needs_freecad
-@pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+@shapes.needs_shared_data
 def test_chamfer_pieces_of_the_benchmarks_sculpted_nut_are_coaxial_cones():
     """The benchmark's sculpted occt_Pump_Nut: a narrow piece of the chamfer cone fits a sphere as
     well as its cone, and identification prefers spheres to cones; about the bore's axis only the
     cone fits, so every piece is a cone on that axis."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
-    import datasets
-    m = datasets.load_part(SHARED_STEP / "occt_Pump_Nut.step", ["sculpt"], log=lambda *_: None)[0]
+    m = shapes.benchmark_mesh("occt_Pump_Nut.step", "sculpt")
     layer = idealize.idealize(idealize.Mesh(m.V, m.F))
     areas = shapes.triangle_areas(m.V, m.F)
     found = dominant(layer, m.gt, areas)
