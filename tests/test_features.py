@@ -334,9 +334,16 @@ def test_noisy_scan_of_the_bracket(noisy_scan):
     V, F, gt, diag, layer = noisy_scan
     areas = shapes.triangle_areas(V, F)
     assert len(layer.features) == 11 and layer.type_counts() == {"plane": 6, "cylinder": 5}
-    # The criterion test_segmentation applies to this noisy scan: the planes take a few degrees of
-    # each fillet's arc where noise hides the tangent edge (share 0.80-0.83 at seed 3).
-    assert correct_faces(layer.labels, gt, areas, share=0.75, purity=0.9) == 11
+    # The thesis's criterion. Where noise hides a fillet's tangent edges, greedy growth left the
+    # planes a few degrees of each arc (80-83 % at seed 3); relaxed, the borders move to where the
+    # noise no longer decides (relaxation.h): 84-86 %.
+    assert correct_faces(layer.labels, gt, areas) == 11
+    fillet_shares = []
+    for face, feature in enumerate(dominant(layer, gt, areas)):
+        if feature["type"] == "cylinder" and feature["params"]["radius"] < 6:
+            in_face = gt == face
+            fillet_shares.append(areas[in_face & (layer.labels == feature["id"])].sum() / areas[in_face].sum())
+    assert len(fillet_shares) == 4 and np.mean(fillet_shares) > 0.83, fillet_shares
     radii = sorted(f["params"]["radius"] for f in layer.features if f["type"] == "cylinder")
     assert abs(radii[-1] / 8 - 1) < 0.01  # the hole: 2400 vertices all round, error ~0.1 %
     fillets = np.array(radii[:4])
@@ -402,6 +409,25 @@ def test_chamfer_pieces_of_the_benchmarks_sculpted_nut_are_coaxial_cones():
     for f in pieces:
         assert f["type"] == "cone", f
         assert axis_angle(f["params"]["axis"], bore["params"]["axis"]) < np.radians(0.5), f
+
+
+@needs_freecad
+@shapes.needs_shared_data
+def test_chamfer_pieces_of_the_benchmarks_scanned_bolt_head():
+    """The benchmark's scan of as_bolt-colored-faces: the hexagon head's six chamfer pieces are
+    narrow cone bands whose greedy growth left most of their faces to the flats beside them (one
+    piece of six correct); relaxed, the borders move where the noise no longer decides."""
+    m = shapes.benchmark_mesh("as_bolt-colored-faces.stp", "scan")
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    areas = shapes.triangle_areas(m.V, m.F)
+    cones = [face for face, kind in enumerate(m.face_types) if kind == "Cone"]
+    correct = 0
+    for face in cones[:-1]:  # the last cone is the shank's tip
+        in_face = m.gt == face
+        patches = np.bincount(layer.labels[in_face], weights=areas[in_face])
+        best = int(np.argmax(patches))
+        correct += patches[best] >= 0.8 * areas[in_face].sum() and patches[best] >= 0.8 * areas[layer.labels == best].sum()
+    assert correct >= 4
 
 
 @needs_freecad
