@@ -61,7 +61,7 @@ std::vector<char> flood_labels(const TriangleMesh& mesh, const MeshTopology& top
   // What a face costs a surface more than its own: where two surfaces fit about equally well (the
   // tangent zone of a fillet), the border stays; where the noise alone decided it moves. Measured on
   // the benchmark: 0 let fillets overreach into their planes and scattered their radii (scan: 83 %
-  // within 1 %), 2 kept half of the gain in faces (scan 345 instead of 356); 0.5 gives 87 %.
+  // within 1 %), 2 kept half of the gain in faces (scan 345 instead of 356); 0.5 gave 87 %.
   constexpr double kSwitchCost = 0.5;
   constexpr int kUnclaimed = -2;
   std::vector<int> claimed(num_faces, kUnclaimed);
@@ -81,7 +81,7 @@ std::vector<char> flood_labels(const TriangleMesh& mesh, const MeshTopology& top
     }
   };
   for (int f = 0; f < num_faces; ++f)
-    if (claimed[f] >= 0 && has_core[claimed[f]] && depth[f] < 0) push_neighbors(f, claimed[f]);
+    if (movable(f) && depth[f] < 0) push_neighbors(f, labels[f]);  // from the patches' cores
   // A patch no wider than the band floods from its face that the surface fits best among those whose
   // neighbours all lie in the patch (a face on the rim may be half in the neighbour), any face when
   // none does.
