@@ -851,8 +851,8 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
     };
     // When growth stops, the surface refitted to all it took may explain more (a disc across a
     // narrow fillet fixes its radius only roughly): growth resumes while refits add to it.
-    for (size_t scanned_from = 0;;) {
-      for (size_t head = scanned_from; head < region.size(); ++head) {
+    for (;;) {
+      for (size_t head = 0; head < region.size(); ++head) {
         progress.poll(++visited, 1 << 12);
         for (int c = 0; c < 3; ++c) {
           const int g = topology.face_neighbor(region[head], c);
@@ -864,7 +864,6 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
       }
       if (region.size() <= fitted + fitted / 8) break;  // (bounded rounds: each grows it by an eighth)
       refit();
-      scanned_from = 0;
     }
     for (int f : region) in_region[f] = 0;
     if (static_cast<int>(region.size()) < min_region_faces) continue;
@@ -1039,6 +1038,18 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       if (l >= 0) ++count[l];
     return count;
   };
+  // Refits the surfaces of the patches that changed (same type, starting from the previous fit) to
+  // `points`.
+  auto refit_changed = [&](const std::vector<char>& changed, const ProgressSpan& span) {
+    const int patches = static_cast<int>(layer.features.size());
+    for (int p = 0; p < patches; ++p) {
+      span.step(static_cast<double>(p) / patches);
+      Feature& f = layer.features[p];
+      if (!changed[p] || f.type == SurfaceType::Freeform) continue;
+      const SurfaceFit fit = fit_surface(f.type, points[p], options.fit, &f.surface);
+      if (fit.valid) f.set_fit(fit);
+    }
+  };
   // Rounds stop early when nothing moves: each round takes its share of the span.
   auto reassign = [&](const ProgressSpan& span) {
     const int patches = static_cast<int>(layer.features.size());
@@ -1052,13 +1063,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
       this_round.step(0.4);
       points = patch_points(mesh, layer.labels, patches);
-      for (int p = 0; p < patches; ++p) {
-        this_round.sub(0.5, 1.0).step(static_cast<double>(p) / patches);
-        Feature& f = layer.features[p];
-        if (!changed[p] || f.type == SurfaceType::Freeform) continue;
-        const SurfaceFit fit = fit_surface(f.type, points[p], options.fit, &f.surface);
-        if (fit.valid) f.set_fit(fit);
-      }
+      refit_changed(changed, this_round.sub(0.5, 1.0));
     }
     // A patch that lost or gained a good part of its faces may be of another type now (the rim of
     // a scan's patch changes by a few percent; a coarse CAD patch may lose half of its facets).
@@ -1176,9 +1181,10 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   // where the first surface to grow stopped (the halves of a narrow fillet on the planes beside it).
   // The borders move, then the surfaces are refitted to what they took, before merging joins pieces.
   if (!exact_mesh) {
-    std::vector<FloodSurface> surfaces(layer.features.size());
+    std::vector<FloodSurface> surfaces(patches);
+    bool moved = false;
     for (int round = 0; round < options.relaxation_rounds; ++round) {
-      for (size_t p = 0; p < layer.features.size(); ++p) {
+      for (int p = 0; p < patches; ++p) {
         const Feature& f = layer.features[p];
         surfaces[p].surface = f.type == SurfaceType::Freeform ? nullptr : &f.surface;
         surfaces[p].distance_unit = std::max(noise, f.spread);
@@ -1186,18 +1192,14 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       }
       const std::vector<char> changed = flood_labels(mesh, topology, surfaces, options.relaxation_band, layer.labels);
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
+      moved = true;
       // Each border went to the surface that the noise of its faces happened to favour: fitted to
       // them, a fillet's radius drifts from round to round (on the bracket's noisy scan one came
       // out 7 % large), so the refits leave out a ring of faces along every rim.
-      points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), 1);
-      for (size_t p = 0; p < layer.features.size(); ++p) {
-        Feature& f = layer.features[p];
-        if (!changed[p] || f.type == SurfaceType::Freeform) continue;
-        const SurfaceFit fit = fit_surface(f.type, points[p], options.fit, &f.surface);
-        if (fit.valid) f.set_fit(fit);
-      }
+      points = patch_points(mesh, layer.labels, patches, 1);
+      refit_changed(changed, ProgressSpan());
     }
-    points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+    if (moved) points = patch_points(mesh, layer.labels, patches);  // what merging sees: the whole rim
     stage("relax");
   }
   std::set<std::pair<int, int>> rejected;
