@@ -298,3 +298,19 @@ def test_scan_of_a_domed_screw_head_gives_its_solid():
     assert solid.solid and solid.valid, solid.problems
     assert solid.surface_types == surface_types(part)
     assert abs(solid.volume / part.Volume - 1) < 5e-3
+
+
+@needs_freecad
+@shapes.needs_shared_data
+@pytest.mark.parametrize("name", ["mfcad_0-0-0-0-6-23.step", "mfcad_0-0-7-9-14-23.step", "as_boxblend_04.step"])
+def test_scans_with_sampled_sharp_edges_give_their_solids(name):
+    """The benchmark's scans of prismatic parts: the strips of facets across their sharp edges (a
+    cylinder of about a facet's width each) made edges that could not close, and the ball where
+    as_boxblend_04's fillets meet was not tangent to them. The solid has the part's faces."""
+    m = shapes.benchmark_mesh(name, "scan")
+    part = shapes.shared_part(name)
+    solid = idealize.make_solid(idealize.idealize(Mesh(m.V, m.F)))
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == surface_types(part)
+    assert solid.faces == len(part.Faces)
+    assert abs(solid.volume / part.Volume - 1) < 5e-3

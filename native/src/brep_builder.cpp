@@ -463,6 +463,7 @@ class BrepBuilder {
   TopoDS_Vertex vertex_at_corner(int mesh_vertex) const { return vertices_.at(mesh_vertex); }
   void make_edges(BrepResult& result);
   void make_faces(BrepResult& result);
+  bool is_cap(size_t region) const;  // a cone or sphere bounded by one closed chain
   std::optional<TopoDS_Face> pole_cap(size_t region);
   TopoDS_Shape assemble(BrepResult& result, const BrepOptions& options);
 
@@ -662,10 +663,12 @@ void BrepBuilder::make_edges(BrepResult& result) {
         p0 = start.NbPoints() ? to_vec(start.NearestPoint()) : points.front();
         // A closed edge starts where it crosses the seam of the periodic face beside it: a full
         // band (a cylinder between two circles) is then bounded by circle, seam, circle, seam,
-        // which healing does not have to split with gap-filling degenerate edges. (Between two
-        // periodic faces, whose seams differ, the mesh decides.)
+        // which healing does not have to split with gap-filling degenerate edges. A cap about a
+        // pole or apex puts its seam through the vertex wherever it is. (Between two periodic
+        // faces, whose seams differ, the mesh decides.)
         auto periodic = [&](int region) {
-          return region >= 0 && !region_surfaces_[region].IsNull() && region_surfaces_[region]->IsUPeriodic();
+          return region >= 0 && !region_surfaces_[region].IsNull() && region_surfaces_[region]->IsUPeriodic() &&
+                 !is_cap(static_cast<size_t>(region));
         };
         if (periodic(chain.left) != periodic(chain.right)) {
           const int region = periodic(chain.left) ? chain.left : chain.right;
@@ -733,9 +736,16 @@ void BrepBuilder::make_edges(BrepResult& result) {
 // ball end): its face is the surface between the circle and that point, with the seam and the
 // degenerate edge there that a face built from the circle alone lacks. The sphere is placed with
 // its pole inside the cap. Sewing joins the cap's circle to the neighbour's.
-std::optional<TopoDS_Face> BrepBuilder::pole_cap(size_t region) {
+bool BrepBuilder::is_cap(size_t region) const {
   const auto& loops = topo_.region_loops[region];
-  if (loops.size() != 1 || loops[0].size() != 1 || !topo_.chains[loops[0][0].chain].closed) return std::nullopt;
+  const Handle(Geom_Surface)& surface = region_surfaces_[region];
+  return loops.size() == 1 && loops[0].size() == 1 && topo_.chains[loops[0][0].chain].closed &&
+         (surface->IsKind(STANDARD_TYPE(Geom_ConicalSurface)) || surface->IsKind(STANDARD_TYPE(Geom_SphericalSurface)));
+}
+
+std::optional<TopoDS_Face> BrepBuilder::pole_cap(size_t region) {
+  if (!is_cap(region)) return std::nullopt;
+  const auto& loops = topo_.region_loops[region];
   const TopoDS_Edge& edge = edges_[loops[0][0].chain];
   double first, last;
   const Handle(Geom_Circle) circle = Handle(Geom_Circle)::DownCast(BRep_Tool::Curve(edge, first, last));
@@ -933,16 +943,22 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     TopoDS_Solid solid = TopoDS::Solid(make_solid.SolidFromShell(fixed_shell));
     shape = solid;
   }
+  result.valid = BRepCheck_Analyzer(shape).IsValid();
   if (options.unify && closed) {
-    // Merging is a refinement: where OCCT's merging fails (it faults on some edges), the faces
-    // stay as they are. Only on a closed solid: on an open shell of many faces OCCT 7.6's merging
-    // ran for minutes (a fragmented CAD torus blend).
+    // Merging is a refinement: where OCCT's merging fails (it faults on some edges) or leaves an
+    // invalid face (a circle cut where a sphere cap's seam met it, whose pcurve then wraps the
+    // wrong way), the faces stay as they are. Only on a closed solid: on an open shell of many
+    // faces OCCT 7.6's merging ran for minutes (a fragmented CAD torus blend).
     try {
       OCC_CATCH_SIGNALS
       ShapeUpgrade_UnifySameDomain unify(shape, Standard_True, Standard_True, Standard_False);
       unify.SetLinearTolerance(tol_ * 1e-3);
       unify.Build();
-      shape = unify.Shape();
+      const bool valid = BRepCheck_Analyzer(unify.Shape()).IsValid();
+      if (valid || !result.valid) {
+        shape = unify.Shape();
+        result.valid = valid;
+      }
     } catch (const Standard_Failure&) {
     }
   }
@@ -1009,8 +1025,8 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   const ProgressSpan checking = progress_.sub("checking", 0.9, 1.0);
   checking.step(0.0);
 
-  // Validate; an invalid result keeps only its valid faces, as a shell (never an invalid solid).
-  result.valid = BRepCheck_Analyzer(shape).IsValid();
+  // Validated by assemble; an invalid result keeps only its valid faces, as a shell (never an
+  // invalid solid).
   result.solid = result.valid && result.closed && shape.ShapeType() == TopAbs_SOLID;
   if (!result.valid) {
     BRep_Builder builder;

@@ -19,17 +19,43 @@ Eigen::Vector3d oriented_normal(const Feature& feature, const Eigen::Vector3d& p
   return n.dot(face) < 0.0 ? Eigen::Vector3d(-n) : n;
 }
 
-// Whether a plane touches a cylinder whose axis is parallel to it: the axis lies one radius from
-// the plane, within the distance tolerance or the radius tolerance. On a scan the plane's patch
-// takes the first degrees of a fillet's arc, so the normals at the patch boundary differ by more
-// than the angle tolerance although the surfaces are tangent.
-bool plane_touches_cylinder(const Feature& plane, const Feature& cylinder, double angle_tolerance,
-                            double distance_tolerance, double radius_tolerance) {
-  if (plane.type != SurfaceType::Plane || cylinder.type != SurfaceType::Cylinder) return false;
-  const Surface &p = plane.surface, &c = cylinder.surface;
-  if (std::abs(p.axis.dot(c.axis)) > std::sin(angle_tolerance)) return false;
-  const double distance = std::abs((c.point - p.point).dot(p.axis));
-  return std::abs(distance - c.radius) <= std::max(distance_tolerance, radius_tolerance * c.radius);
+// Whether two features' surfaces touch along a curve, as a blend touches the faces it rounds: a
+// plane and a cylinder whose axis lies one radius from it; a sphere and a cylinder of its radius
+// through its centre, or a plane one radius from its centre; a torus and a plane normal to its
+// axis one tube radius from its centre, or a coaxial cylinder on its tube's inner or outer circle.
+// Each within the distance tolerance or the radius tolerance. On a scan the faces of a blend take
+// a few degrees of each other's arcs, so the normals at the patch boundary differ by more than the
+// angle tolerance although the surfaces are tangent.
+bool surfaces_touch(const Feature& fa, const Feature& fb, double angle_tolerance, double distance_tolerance,
+                    double radius_tolerance) {
+  const Feature* f[2] = {&fa, &fb};
+  if (fa.type > fb.type) std::swap(f[0], f[1]);  // Plane < Cylinder < Cone < Sphere < Torus
+  const Surface &a = f[0]->surface, &b = f[1]->surface;
+  auto near = [&](double x, double size) { return std::abs(x) <= std::max(distance_tolerance, radius_tolerance * size); };
+  auto parallel = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+    return std::abs(x.dot(y)) >= std::cos(angle_tolerance);
+  };
+  auto off_axis = [](const Surface& round, const Eigen::Vector3d& p) {
+    const Eigen::Vector3d d = p - round.point;
+    return (d - d.dot(round.axis) * round.axis).norm();
+  };
+  const double height = (b.point - a.point).dot(a.axis);  // of b's centre above a plane a
+  switch (a.type) {
+    case SurfaceType::Plane:
+      if (b.type == SurfaceType::Cylinder)
+        return std::abs(a.axis.dot(b.axis)) <= std::sin(angle_tolerance) && near(std::abs(height) - b.radius, b.radius);
+      if (b.type == SurfaceType::Sphere) return near(std::abs(height) - b.radius, b.radius);
+      if (b.type == SurfaceType::Torus) return parallel(a.axis, b.axis) && near(std::abs(height) - b.minor, b.minor);
+      return false;
+    case SurfaceType::Cylinder:
+      if (b.type == SurfaceType::Sphere) return near(off_axis(a, b.point), b.radius) && near(a.radius - b.radius, b.radius);
+      if (b.type == SurfaceType::Torus)
+        return parallel(a.axis, b.axis) && near(off_axis(a, b.point), b.minor) &&
+               (near(a.radius - (b.radius + b.minor), b.minor) || near(a.radius - (b.radius - b.minor), b.minor));
+      return false;
+    default:
+      return false;
+  }
 }
 
 void find_adjacency(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
@@ -55,9 +81,7 @@ void find_adjacency(const TriangleMesh& mesh, const MeshTopology& topology, cons
     for (const auto& s : samples) a.length += s.second;
     a.angle = weighted_median(samples);
     const Feature &fa = features[a.a], &fb = features[a.b];
-    const bool touching =
-        plane_touches_cylinder(fa, fb, angle_tolerance, distance_tolerance, radius_tolerance) ||
-        plane_touches_cylinder(fb, fa, angle_tolerance, distance_tolerance, radius_tolerance);
+    const bool touching = surfaces_touch(fa, fb, angle_tolerance, distance_tolerance, radius_tolerance);
     a.continuity = a.angle < angle_tolerance || touching ? Continuity::G1 : Continuity::G0;
     adjacency.push_back(a);
   }

@@ -1177,20 +1177,39 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   reassign(progress.sub("reassign", 0.355, 0.5));
   const int patches = static_cast<int>(layer.features.size());
   stage("reassign_after_split");
+  // The surfaces of the features with their spreads, at least the mesh's noise.
+  auto flood_surfaces = [&] {
+    std::vector<FloodSurface> surfaces(layer.features.size());
+    for (size_t p = 0; p < surfaces.size(); ++p) {
+      const Feature& f = layer.features[p];
+      surfaces[p].surface = f.type == SurfaceType::Freeform ? nullptr : &f.surface;
+      surfaces[p].distance_unit = std::max(noise, f.spread);
+      surfaces[p].angle_unit = std::max(normal_noise, f.normal_spread);
+    }
+    return surfaces;
+  };
+  // On a noisy mesh, a patch that the surfaces around it explain adds nothing but edges: the strip
+  // of chamfered facets along a sharp edge, fitted by a cylinder of about its width. Before the
+  // relaxation, which then settles the borders the strips leave, and once more at the end for the
+  // strips that splitting and merging leave.
+  auto dissolve_strips = [&] {
+    if (exact_mesh) return;
+    const std::vector<char> changed = dissolve_explained_patches(mesh, topology, flood_surfaces(), layer.labels);
+    if (std::find(changed.begin(), changed.end(), 1) == changed.end()) return;
+    points = patch_points(mesh, layer.labels, patches, 1);  // without the rims, as relaxing does
+    refit_changed(changed, ProgressSpan());
+    points = patch_points(mesh, layer.labels, patches);
+  };
+  dissolve_strips();
+  stage("dissolve");
   // On a noisy mesh, the split pieces flood again from their surfaces: greedy growth left borders
   // where the first surface to grow stopped (the halves of a narrow fillet on the planes beside it).
   // The borders move, then the surfaces are refitted to what they took, before merging joins pieces.
   if (!exact_mesh) {
-    std::vector<FloodSurface> surfaces(patches);
     bool moved = false;
     for (int round = 0; round < options.relaxation_rounds; ++round) {
-      for (int p = 0; p < patches; ++p) {
-        const Feature& f = layer.features[p];
-        surfaces[p].surface = f.type == SurfaceType::Freeform ? nullptr : &f.surface;
-        surfaces[p].distance_unit = std::max(noise, f.spread);
-        surfaces[p].angle_unit = std::max(normal_noise, f.normal_spread);
-      }
-      const std::vector<char> changed = flood_labels(mesh, topology, surfaces, options.relaxation_band, layer.labels);
+      const std::vector<char> changed =
+          flood_labels(mesh, topology, flood_surfaces(), options.relaxation_band, layer.labels);
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
       moved = true;
       // Each border went to the surface that the noise of its faces happened to favour: fitted to
@@ -1230,6 +1249,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   stage("merge");
   reassign(progress.sub("reassign", 0.87, 0.975));
   stage("reassign_after_merge");
+  dissolve_strips();
+  stage("dissolve_after_merge");
   progress.sub("classify", 0.975, 0.98).step(0.0);
   undo_inexact_splits(mesh, area, labels, was_split, kExactFraction * layer.distance_tolerance, identify_points, curvature,
                       layer.features, layer.labels);

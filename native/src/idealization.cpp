@@ -190,6 +190,40 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
     }
   }
 
+  // 7. A sphere tangent to cylinders (the ball in the corner where fillets meet, thesis 4.3 case 2)
+  // is completely defined by them: its centre is the point nearest to their axes (on the axis for
+  // one), its radius theirs.
+  for (Feature& sphere : features) {
+    if (sphere.type != SurfaceType::Sphere) continue;
+    std::vector<const Surface*> cylinders;
+    for (const FeatureRelation& r : relations) {
+      if (r.kind != "tangent" || (r.features[0] != sphere.id && r.features[1] != sphere.id)) continue;
+      const Feature& other = features[r.features[0] == sphere.id ? r.features[1] : r.features[0]];
+      if (other.type == SurfaceType::Cylinder) cylinders.push_back(&other.surface);
+    }
+    if (cylinders.empty()) continue;
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    double radius = 0.0;
+    for (const Surface* c : cylinders) {
+      const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - c->axis * c->axis.transpose();
+      normal += across;
+      rhs += across * c->point;
+      radius += c->radius / cylinders.size();
+    }
+    // Along a single axis (or nearly parallel ones, within 8°) the sphere keeps its place.
+    Eigen::Vector3d& centre = sphere.surface.point;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(normal);
+    if (solver.eigenvalues()[0] > 1e-2) {
+      centre = solver.eigenvectors() * solver.eigenvalues().cwiseInverse().asDiagonal() *
+               solver.eigenvectors().transpose() * rhs;
+    } else {
+      const Surface& c = *cylinders.front();
+      centre = c.point + (centre - c.point).dot(c.axis) * c.axis;
+    }
+    sphere.surface.radius = radius;
+  }
+
   int changed = 0;
   for (size_t i = 0; i < features.size(); ++i) {
     const Surface &a = before[i].surface, &b = features[i].surface;

@@ -32,4 +32,13 @@ struct FloodSurface {
 std::vector<char> flood_labels(const TriangleMesh& mesh, const MeshTopology& topology,
                                const std::vector<FloodSurface>& surfaces, int band, std::vector<int>& labels);
 
+// Hands out the faces of the patches whose vertices the surfaces of the patches around them already
+// explain (within noise, in units of each surface's distance spread) to those surfaces, cheapest
+// first as flood_labels does: the strips that the chamfered sharp edges of a re-tessellated scan
+// leave between two faces, which a cylinder of about their width fits as well as the two faces do.
+// Smaller patches go first. Returns which patches (#patches) lost or gained faces; a dissolved patch
+// keeps the faces that no surface reaches.
+std::vector<char> dissolve_explained_patches(const TriangleMesh& mesh, const MeshTopology& topology,
+                                             const std::vector<FloodSurface>& surfaces, std::vector<int>& labels);
+
 }  // namespace idealize
