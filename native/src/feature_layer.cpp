@@ -939,6 +939,12 @@ void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, co
   int measured = 0;
   layer.max_deviation = 0.0;
   layer.vertex_deviation = Eigen::VectorXd::Constant(mesh.num_vertices(), std::numeric_limits<double>::quiet_NaN());
+  // How far noise alone takes a vertex of patch p from its surface, in units of the fit's spread: a
+  // false alarm in a hundred patches among its n vertices (a patch has about half as many vertices as
+  // faces) at sqrt(2 ln(100 n)).
+  std::vector<double> reach(features.size());
+  for (size_t p = 0; p < features.size(); ++p)
+    reach[p] = std::sqrt(2.0 * std::log(std::max(1.0, 50.0 * features[p].triangles)));
   std::vector<int> around;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     progress.tick(v, mesh.num_vertices());
@@ -958,10 +964,27 @@ void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, co
     ++measured;
     layer.max_deviation = std::max(layer.max_deviation, nearest);
 
-    // A surface that does not explain the vertex (beyond 3 σ of its fit: the vertex lies in a part
-    // of the patch the feature does not describe) does not move it.
+    // A surface that does not explain the vertex does not move it: beyond 3 σ of its fit the vertex
+    // lies in a part of the patch the feature does not describe (a fillet too narrow to be found),
+    // unless the noise put it there: within the patch's reach, with neighbours whose mean distance
+    // is within 3 σ of the mean of as many (those in an undescribed part are off together, and so
+    // are those across a sharp edge, where the vertex keeps to 3 σ).
+    auto noise_outlier = [&](int p, double sigma) {
+      double sum = 0.0;
+      int count = 0;
+      for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f) {
+        for (int c = 0; c < 3; ++c)
+          if (mesh.F(*f, c) != v) {  // each neighbour twice on a closed fan
+            sum += signed_distance(features[p].surface, mesh.V.row(mesh.F(*f, c)).transpose());
+            ++count;
+          }
+      }
+      return count > 0 && std::abs(sum / count) <= 3.0 * sigma / std::sqrt(0.5 * count);
+    };
     around.erase(std::remove_if(around.begin(), around.end(), [&](int p) {
-                   return std::abs(signed_distance(features[p].surface, original)) > 3.0 * features[p].spread + kExactFraction * tolerance;
+                   const double sigma = features[p].spread + kExactFraction * tolerance;
+                   const double d = std::abs(signed_distance(features[p].surface, original));
+                   return d > 3.0 * sigma && (d > reach[p] * sigma || !noise_outlier(p, sigma));
                  }), around.end());
     if (around.empty()) continue;
     Eigen::Vector3d x = original;
