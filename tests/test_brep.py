@@ -314,3 +314,19 @@ def test_scans_with_sampled_sharp_edges_give_their_solids(name):
     assert solid.surface_types == surface_types(part)
     assert solid.faces == len(part.Faces)
     assert abs(solid.volume / part.Volume - 1) < 5e-3
+
+
+@needs_freecad
+def test_noisy_scan_of_a_corner_ball_gives_its_solid():
+    """Three fillets meeting in a ball (thesis 4.3, case 2), scanned: on the mesh the fillets also
+    touch each other for a few facets beside the ball. Each fillet is tangent to the ball, so where
+    two of them and the ball meet is where their circles on the ball cross, and the fillets' short
+    common boundary there is no edge. The solid has the part's faces."""
+    part = shapes.corner_blend_box()
+    V, F, _, diag = shapes.uniform_remesh(part)
+    V = shapes.normal_noise(V, F, diag, 2)
+    solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == surface_types(part)
+    assert solid.faces == len(part.Faces)
+    assert abs(solid.volume / part.Volume - 1) < 5e-3

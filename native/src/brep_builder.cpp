@@ -436,6 +436,30 @@ Vec3 corner_point(const std::vector<const Surface*>& surfaces, const Vec3& x0, d
   return x;
 }
 
+// What fixes a corner: the surfaces that meet there, except that a cylinder tangent to a sphere (a
+// fillet running into the ball where fillets meet, thesis 4.3 case 2) touches it along the circle in
+// the plane through the centre normal to the axis, and that plane stands in for it. Tangent surfaces
+// share their normal where they touch, so least squares could not tell where along the tangent
+// plane two fillets and their ball meet; the planes cross the sphere there.
+std::vector<Surface> corner_constraints(const std::vector<const Surface*>& surfaces, double tol) {
+  std::vector<Surface> out;
+  for (const Surface* s : surfaces) {
+    Surface c = *s;
+    if (s->type == SurfaceType::Cylinder) {
+      for (const Surface* ball : surfaces) {
+        if (ball->type != SurfaceType::Sphere || std::abs(ball->radius - s->radius) > tol) continue;
+        const Vec3 d = ball->point - s->point;
+        if ((d - d.dot(s->axis) * s->axis).norm() > tol) continue;
+        c.type = SurfaceType::Plane;
+        c.point = ball->point;
+        break;
+      }
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
 // ---------------------------------------------------------------------------------------------
 // The builder
 
@@ -557,7 +581,10 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
       }
     }
     const Vec3 x0 = mesh_.V.row(v).transpose();
-    const Vec3 x = around.empty() ? x0 : corner_point(around, x0, tol_);
+    const std::vector<Surface> constraints = corner_constraints(around, tol_);
+    std::vector<const Surface*> meeting;
+    for (const Surface& c : constraints) meeting.push_back(&c);
+    const Vec3 x = around.empty() ? x0 : corner_point(meeting, x0, tol_);
     corner_points_[v] = x;
   }
   // Corners that the surfaces put at one point (four features meeting where the mesh shows two
