@@ -1217,7 +1217,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   // strips that splitting and merging leave.
   auto dissolve_strips = [&] {
     if (exact_mesh) return;
-    const std::vector<char> changed = dissolve_explained_patches(mesh, topology, flood_surfaces(), layer.labels);
+    const std::vector<char> changed =
+        dissolve_explained_patches(mesh, topology, flood_surfaces(), layer.labels, progress);
     if (std::find(changed.begin(), changed.end(), 1) == changed.end()) return;
     points = patch_points(mesh, layer.labels, patches, 1);  // without the rims, as relaxing does
     refit_changed(changed, ProgressSpan());
@@ -1232,7 +1233,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     bool moved = false;
     for (int round = 0; round < options.relaxation_rounds; ++round) {
       const std::vector<char> changed =
-          flood_labels(mesh, topology, flood_surfaces(), options.relaxation_band, layer.labels);
+          flood_labels(mesh, topology, flood_surfaces(), options.relaxation_band, layer.labels, progress);
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
       moved = true;
       // Each border went to the surface that the noise of its faces happened to favour: fitted to

@@ -75,8 +75,10 @@ void push_neighbors(const TriangleMesh& mesh, const MeshTopology& topology, cons
 // faces claimed by another patch than their own. Returns which patches lost or gained faces.
 std::vector<char> flood_and_relabel(const TriangleMesh& mesh, const MeshTopology& topology,
                                     const std::vector<FloodSurface>& surfaces, std::vector<int>& claimed,
-                                    CandidateQueue& queue, std::vector<int>& labels) {
+                                    CandidateQueue& queue, std::vector<int>& labels, const ProgressSpan& progress) {
+  long long popped = 0;
   while (!queue.empty()) {
+    progress.poll(++popped, 1 << 12);
     const auto [cost, f, p] = queue.top();
     queue.pop();
     if (claimed[f] != kUnclaimed) continue;
@@ -95,7 +97,8 @@ std::vector<char> flood_and_relabel(const TriangleMesh& mesh, const MeshTopology
 }  // namespace
 
 std::vector<char> flood_labels(const TriangleMesh& mesh, const MeshTopology& topology,
-                               const std::vector<FloodSurface>& surfaces, int band, std::vector<int>& labels) {
+                               const std::vector<FloodSurface>& surfaces, int band, std::vector<int>& labels,
+                               const ProgressSpan& progress) {
   const int num_faces = mesh.num_faces();
   const int num_patches = static_cast<int>(surfaces.size());
   auto movable = [&](int f) { return labels[f] >= 0 && labels[f] < num_patches && surfaces[labels[f]].surface != nullptr; };
@@ -159,11 +162,12 @@ std::vector<char> flood_labels(const TriangleMesh& mesh, const MeshTopology& top
   }
   for (int p = 0; p < num_patches; ++p)
     if (seed[p] >= 0) queue.emplace(seed_cost[p], seed[p], p);
-  return flood_and_relabel(mesh, topology, surfaces, claimed, queue, labels);
+  return flood_and_relabel(mesh, topology, surfaces, claimed, queue, labels, progress);
 }
 
 std::vector<char> dissolve_explained_patches(const TriangleMesh& mesh, const MeshTopology& topology,
-                                             const std::vector<FloodSurface>& surfaces, std::vector<int>& labels) {
+                                             const std::vector<FloodSurface>& surfaces, std::vector<int>& labels,
+                                             const ProgressSpan& progress) {
   const int num_faces = mesh.num_faces();
   const int num_patches = static_cast<int>(surfaces.size());
   std::vector<std::vector<int>> faces(num_patches);
@@ -178,6 +182,7 @@ std::vector<char> dissolve_explained_patches(const TriangleMesh& mesh, const Mes
   std::vector<int> neighbours;
   std::vector<char> seen(mesh.num_vertices(), 0);
   for (int p : order) {
+    progress.check();
     if (faces[p].empty()) continue;
     neighbours.clear();
     for (int f : faces[p])
@@ -234,7 +239,7 @@ std::vector<char> dissolve_explained_patches(const TriangleMesh& mesh, const Mes
     if (p >= 0 && p < num_patches && surfaces[p].surface != nullptr)
       push_neighbors(mesh, topology, surfaces, labels, claimed, f, p, queue);
   }
-  return flood_and_relabel(mesh, topology, surfaces, claimed, queue, labels);
+  return flood_and_relabel(mesh, topology, surfaces, claimed, queue, labels, progress);
 }
 
 }  // namespace idealize

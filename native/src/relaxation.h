@@ -8,6 +8,7 @@
 #pragma once
 
 #include "mesh.h"
+#include "progress.h"
 #include "surface.h"
 
 #include <vector>
@@ -28,17 +29,19 @@ struct FloodSurface {
 // distance of its vertices and its normal's squared angle, each in units of the spread, halved,
 // plus the logarithms of the spreads), so that a loosely fitted surface does not take what a tight
 // one explains. Faces that no surface reaches keep their label. Returns which patches (#patches)
-// lost or gained faces.
+// lost or gained faces. `progress` is polled for cancellation only.
 std::vector<char> flood_labels(const TriangleMesh& mesh, const MeshTopology& topology,
-                               const std::vector<FloodSurface>& surfaces, int band, std::vector<int>& labels);
+                               const std::vector<FloodSurface>& surfaces, int band, std::vector<int>& labels,
+                               const ProgressSpan& progress = ProgressSpan());
 
 // Hands out the faces of the patches whose vertices the surfaces of the patches around them already
 // explain (within noise, in units of each surface's distance spread) to those surfaces, cheapest
 // first as flood_labels does: the strips that the chamfered sharp edges of a re-tessellated scan
 // leave between two faces, which a cylinder of about their width fits as well as the two faces do.
 // Smaller patches go first. Returns which patches (#patches) lost or gained faces; a dissolved patch
-// keeps the faces that no surface reaches.
+// keeps the faces that no surface reaches. `progress` is polled for cancellation only.
 std::vector<char> dissolve_explained_patches(const TriangleMesh& mesh, const MeshTopology& topology,
-                                             const std::vector<FloodSurface>& surfaces, std::vector<int>& labels);
+                                             const std::vector<FloodSurface>& surfaces, std::vector<int>& labels,
+                                             const ProgressSpan& progress = ProgressSpan());
 
 }  // namespace idealize
