@@ -655,3 +655,20 @@ def test_corner_ball_of_a_noisy_scan_is_centred_on_the_fillet_axes():
         assert off_axis(ball["params"]["center"], f["params"]["point"], f["params"]["axis"]) < 1e-9 * diag
         assert ball["params"]["radius"] == pytest.approx(f["params"]["radius"], rel=1e-12)
     assert abs(ball["params"]["radius"] / 2.5 - 1) < 0.01
+
+
+@needs_freecad
+@shapes.needs_shared_data
+def test_equal_radii_of_the_benchmarks_sculpted_plate():
+    """The benchmark's sculpted as_ANC101: the undulation moves each of the nine holes of one design
+    radius by a different part of its amplitude, and their fitted radii spread by more than the radius
+    tolerance (5 %), but by no more than each fit's own spread: they are one design radius."""
+    m = shapes.benchmark_mesh("as_ANC101.stp", "sculpt")
+    part = shapes.shared_part("as_ANC101.stp")
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    found = dominant(layer, m.gt, shapes.triangle_areas(m.V, m.F))
+    holes = {f["id"] for face, f in zip(part.Faces, found) if f is not None and f["type"] == "cylinder"
+             and type(face.Surface).__name__ == "Cylinder" and abs(face.Surface.Radius - 7.68) < 1e-3}
+    assert len(holes) >= 8
+    groups = [set(r["features"]) for r in layer.relations if r["kind"] == "equal_radius"]
+    assert any(holes <= g for g in groups), (holes, groups)
