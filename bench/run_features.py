@@ -264,18 +264,24 @@ def markdown(results: Dict) -> str:
     if results.get("scaling"):
         sc = results["scaling"]
         add(f"Speed: identification, graph and projection of a {sc['triangles']}-triangle scan-like mesh "
-            f"({sc['features']} features): {sc['feature_seconds']:.3f} s (segmentation before it {sc['segment_seconds']:.3f} s).")
+            f"({sc['features']} features): {sc['feature_seconds']:.3f} s, best of {sc.get('repeats', 1)} runs "
+            f"(segmentation before it {sc['segment_seconds']:.3f} s).")
         add("")
     return "\n".join(L)
 
 
-def bench_scaling() -> Dict:
+def bench_scaling(repeats: int = 3) -> Dict:
+    """The best of `repeats` runs: on a shared machine other work only ever adds time."""
     import idealize
     m = datasets.scaling_mesh(SCALING_TRIANGLES)
-    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
-    feature = sum(v for k, v in layer.timings.items() if k.startswith("features."))
-    return {"triangles": m.num_triangles, "features": len(layer.features), "feature_seconds": feature,
-            "segment_seconds": sum(layer.segmentation.timings.values())}
+    runs = []
+    for _ in range(repeats):
+        layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+        runs.append((sum(v for k, v in layer.timings.items() if k.startswith("features.")),
+                     sum(layer.segmentation.timings.values())))
+    return {"triangles": m.num_triangles, "features": len(layer.features), "repeats": repeats,
+            "feature_seconds": min(r[0] for r in runs), "segment_seconds": min(r[1] for r in runs),
+            "feature_seconds_runs": [r[0] for r in runs]}
 
 
 def main(argv=None) -> int:
