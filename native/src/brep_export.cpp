@@ -108,6 +108,10 @@ TriangleMesh triangulate_faces(const TopoDS_Shape& shape, double deflection, con
       triangles.emplace_back(offset + a - 1, offset + b - 1, offset + c - 1);
     }
   }
+  // The mesh stays out of the shape: OpenCASCADE's mesher leaves polygons on the triangulation that
+  // its own checker rejects where a corner lies a vertex tolerance away from an edge's curve, and a
+  // shape carrying them (BRep text for FreeCAD) would no longer be the valid solid that was checked.
+  BRepTools::Clean(shape);
   TriangleMesh mesh;
   mesh.V.resize(static_cast<Eigen::Index>(points.size()), 3);
   mesh.F.resize(static_cast<Eigen::Index>(triangles.size()), 3);
