@@ -447,9 +447,9 @@ std::vector<Surface> corner_constraints(const std::vector<const Surface*>& surfa
     Surface c = *s;
     if (s->type == SurfaceType::Cylinder) {
       for (const Surface* ball : surfaces) {
-        if (ball->type != SurfaceType::Sphere || std::abs(ball->radius - s->radius) > tol) continue;
-        const Vec3 d = ball->point - s->point;
-        if ((d - d.dot(s->axis) * s->axis).norm() > tol) continue;
+        if (ball->type != SurfaceType::Sphere || std::abs(ball->radius - s->radius) > tol ||
+            axial_coordinates(s->point, s->axis, ball->point).distance > tol)
+          continue;
         c.type = SurfaceType::Plane;
         c.point = ball->point;
         break;
@@ -970,25 +970,23 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     TopoDS_Solid solid = TopoDS::Solid(make_solid.SolidFromShell(fixed_shell));
     shape = solid;
   }
-  result.valid = BRepCheck_Analyzer(shape).IsValid();
   if (options.unify && closed) {
     // Merging is a refinement: where OCCT's merging fails (it faults on some edges) or leaves an
     // invalid face (a circle cut where a sphere cap's seam met it, whose pcurve then wraps the
-    // wrong way), the faces stay as they are. Only on a closed solid: on an open shell of many
-    // faces OCCT 7.6's merging ran for minutes (a fragmented CAD torus blend).
+    // wrong way) of a valid solid, the faces stay as they are. Only on a closed solid: on an open
+    // shell of many faces OCCT 7.6's merging ran for minutes (a fragmented CAD torus blend). The
+    // merged shape is checked first: it is usually valid, and then the one check is all.
     try {
       OCC_CATCH_SIGNALS
       ShapeUpgrade_UnifySameDomain unify(shape, Standard_True, Standard_True, Standard_False);
       unify.SetLinearTolerance(tol_ * 1e-3);
       unify.Build();
-      const bool valid = BRepCheck_Analyzer(unify.Shape()).IsValid();
-      if (valid || !result.valid) {
-        shape = unify.Shape();
-        result.valid = valid;
-      }
+      result.valid = BRepCheck_Analyzer(unify.Shape()).IsValid();
+      if (result.valid || !BRepCheck_Analyzer(shape).IsValid()) return unify.Shape();
     } catch (const Standard_Failure&) {
     }
   }
+  result.valid = BRepCheck_Analyzer(shape).IsValid();
   return shape;
 }
 

@@ -35,10 +35,7 @@ bool surfaces_touch(const Feature& fa, const Feature& fb, double angle_tolerance
   auto parallel = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
     return std::abs(x.dot(y)) >= std::cos(angle_tolerance);
   };
-  auto off_axis = [](const Surface& round, const Eigen::Vector3d& p) {
-    const Eigen::Vector3d d = p - round.point;
-    return (d - d.dot(round.axis) * round.axis).norm();
-  };
+  const double off_axis = axial_coordinates(a.point, a.axis, b.point).distance;  // of b's centre from a's axis
   const double height = (b.point - a.point).dot(a.axis);  // of b's centre above a plane a
   switch (a.type) {
     case SurfaceType::Plane:
@@ -48,9 +45,9 @@ bool surfaces_touch(const Feature& fa, const Feature& fb, double angle_tolerance
       if (b.type == SurfaceType::Torus) return parallel(a.axis, b.axis) && near(std::abs(height) - b.minor, b.minor);
       return false;
     case SurfaceType::Cylinder:
-      if (b.type == SurfaceType::Sphere) return near(off_axis(a, b.point), b.radius) && near(a.radius - b.radius, b.radius);
+      if (b.type == SurfaceType::Sphere) return near(off_axis, b.radius) && near(a.radius - b.radius, b.radius);
       if (b.type == SurfaceType::Torus)
-        return parallel(a.axis, b.axis) && near(off_axis(a, b.point), b.minor) &&
+        return parallel(a.axis, b.axis) && near(off_axis, b.minor) &&
                (near(a.radius - (b.radius + b.minor), b.minor) || near(a.radius - (b.radius - b.minor), b.minor));
       return false;
     default:

@@ -1214,37 +1214,37 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   // On a noisy mesh, a patch that the surfaces around it explain adds nothing but edges: the strip
   // of chamfered facets along a sharp edge, fitted by a cylinder of about its width. Before the
   // relaxation, which then settles the borders the strips leave, and once more at the end for the
-  // strips that splitting and merging leave.
+  // strips that splitting and merging leave. The changed patches are refitted without their rims,
+  // as relaxing does; returns whether `points` are those rim-less points now.
   auto dissolve_strips = [&] {
-    if (exact_mesh) return;
+    if (exact_mesh) return false;
     const std::vector<char> changed =
         dissolve_explained_patches(mesh, topology, flood_surfaces(), layer.labels, progress);
-    if (std::find(changed.begin(), changed.end(), 1) == changed.end()) return;
-    points = patch_points(mesh, layer.labels, patches, 1);  // without the rims, as relaxing does
+    if (std::find(changed.begin(), changed.end(), 1) == changed.end()) return false;
+    points = patch_points(mesh, layer.labels, patches, 1);
     refit_changed(changed, ProgressSpan());
-    points = patch_points(mesh, layer.labels, patches);
+    return true;
   };
-  dissolve_strips();
+  bool rimless = dissolve_strips();
   stage("dissolve");
   // On a noisy mesh, the split pieces flood again from their surfaces: greedy growth left borders
   // where the first surface to grow stopped (the halves of a narrow fillet on the planes beside it).
   // The borders move, then the surfaces are refitted to what they took, before merging joins pieces.
   if (!exact_mesh) {
-    bool moved = false;
     for (int round = 0; round < options.relaxation_rounds; ++round) {
       const std::vector<char> changed =
           flood_labels(mesh, topology, flood_surfaces(), options.relaxation_band, layer.labels, progress);
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
-      moved = true;
+      rimless = true;
       // Each border went to the surface that the noise of its faces happened to favour: fitted to
       // them, a fillet's radius drifts from round to round (on the bracket's noisy scan one came
       // out 7 % large), so the refits leave out a ring of faces along every rim.
       points = patch_points(mesh, layer.labels, patches, 1);
       refit_changed(changed, ProgressSpan());
     }
-    if (moved) points = patch_points(mesh, layer.labels, patches);  // what merging sees: the whole rim
     stage("relax");
   }
+  if (rimless) points = patch_points(mesh, layer.labels, patches);  // what merging sees: the whole rim
   std::set<std::pair<int, int>> rejected;
   const double exact_distance = std::max(kExactFraction * layer.distance_tolerance, 2.0 * floor);
   // Later passes refit fewer open pairs, and most runs stop early: each pass takes a third of
@@ -1273,7 +1273,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   stage("merge");
   reassign(progress.sub("reassign", 0.87, 0.975));
   stage("reassign_after_merge");
-  dissolve_strips();
+  dissolve_strips();  // the stages after it gather their own points
   stage("dissolve_after_merge");
   progress.sub("classify", 0.975, 0.98).step(0.0);
   undo_inexact_splits(mesh, area, labels, was_split, kExactFraction * layer.distance_tolerance, identify_points, curvature,

@@ -84,6 +84,18 @@ Eigen::Vector3d snapped(const Eigen::Vector3d& d, const std::vector<Eigen::Vecto
 
 double& tube_radius(Feature& f) { return f.type == SurfaceType::Torus ? f.surface.minor : f.surface.radius; }
 
+// The surfaces of the features of `type` in a tangent relation with feature `id`.
+std::vector<const Surface*> tangent_surfaces(int id, SurfaceType type, const std::vector<FeatureRelation>& relations,
+                                             const std::vector<Feature>& features) {
+  std::vector<const Surface*> out;
+  for (const FeatureRelation& r : relations) {
+    if (r.kind != "tangent" || (r.features[0] != id && r.features[1] != id)) continue;
+    const Feature& other = features[r.features[0] == id ? r.features[1] : r.features[0]];
+    if (other.type == type) out.push_back(&other.surface);
+  }
+  return out;
+}
+
 }  // namespace
 
 int idealize_features(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
@@ -156,13 +168,10 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
   for (Feature& cylinder : features) {
     if (cylinder.type != SurfaceType::Cylinder) continue;
     Surface& c = cylinder.surface;
-    std::vector<const Surface*> planes;
-    for (const FeatureRelation& r : relations) {
-      if (r.kind != "tangent" || (r.features[0] != cylinder.id && r.features[1] != cylinder.id)) continue;
-      const Feature& other = features[r.features[0] == cylinder.id ? r.features[1] : r.features[0]];
-      if (other.type == SurfaceType::Plane && std::abs(other.surface.axis.dot(c.axis)) <= std::sin(angle))
-        planes.push_back(&other.surface);
-    }
+    std::vector<const Surface*> planes = tangent_surfaces(cylinder.id, SurfaceType::Plane, relations, features);
+    planes.erase(std::remove_if(planes.begin(), planes.end(),
+                                [&](const Surface* plane) { return std::abs(plane->axis.dot(c.axis)) > std::sin(angle); }),
+                 planes.end());
     // Each plane n·x = n·o must lie at distance R from the axis, on the side the axis is now.
     auto side = [&](const Surface* plane) { return (c.point - plane->point).dot(plane->axis) >= 0.0 ? 1.0 : -1.0; };
     if (planes.size() == 1) {
@@ -195,12 +204,7 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
   // one), its radius theirs.
   for (Feature& sphere : features) {
     if (sphere.type != SurfaceType::Sphere) continue;
-    std::vector<const Surface*> cylinders;
-    for (const FeatureRelation& r : relations) {
-      if (r.kind != "tangent" || (r.features[0] != sphere.id && r.features[1] != sphere.id)) continue;
-      const Feature& other = features[r.features[0] == sphere.id ? r.features[1] : r.features[0]];
-      if (other.type == SurfaceType::Cylinder) cylinders.push_back(&other.surface);
-    }
+    const std::vector<const Surface*> cylinders = tangent_surfaces(sphere.id, SurfaceType::Cylinder, relations, features);
     if (cylinders.empty()) continue;
     Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
     Eigen::Vector3d rhs = Eigen::Vector3d::Zero();

@@ -48,7 +48,7 @@ bool meet_within(const std::vector<FloodSurface>& surfaces, const std::array<int
     for (int q : on) x = closest_point(*surfaces[q].surface, x);
   for (int q : on)
     if (std::abs(signed_distance(*surfaces[q].surface, x)) > surfaces[q].distance_unit) return false;
-  return (x - centre).norm() <= 2.0 * radius;
+  return (x - centre).norm() <= radius;
 }
 
 constexpr int kUnclaimed = -2;
@@ -222,7 +222,9 @@ std::vector<char> dissolve_explained_patches(const TriangleMesh& mesh, const Mes
           ++count;
         }
       }
-      straddles = meet_within(surfaces, on, centroid, radius_about(mesh, f, centroid));
+      // Within the facet's diameter: a chamfered edge's strip is two facets wide, and on a facet
+      // beside the edge the surfaces meet just beyond its corners.
+      straddles = meet_within(surfaces, on, centroid, 2.0 * radius_about(mesh, f, centroid));
     }
     for (int f : faces[p])
       for (int c = 0; c < 3; ++c) seen[mesh.F(f, c)] = 0;
