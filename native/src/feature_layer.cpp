@@ -4,6 +4,7 @@
 #include "feature_graph.h"
 #include "idealization.h"
 #include "shared_axes.h"
+#include "tangent_boundaries.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -931,6 +932,19 @@ void compact_features(std::vector<int>& labels, std::vector<Feature>& features) 
 // Moves every input vertex onto the surfaces of the features around it that explain it: onto the
 // one surface inside a patch, onto the intersection of two or three along edges and at corners
 // (alternating projections, which converge to the nearest common point of transversal surfaces).
+// Area and triangle count of each feature from the labels.
+void count_faces(const Eigen::VectorXd& area, const std::vector<int>& labels, std::vector<Feature>& features) {
+  for (Feature& feature : features) {
+    feature.area = 0.0;
+    feature.triangles = 0;
+  }
+  for (size_t f = 0; f < labels.size(); ++f)
+    if (labels[f] >= 0) {
+      features[labels[f]].area += area[f];
+      ++features[labels[f]].triangles;
+    }
+}
+
 void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
                       const std::vector<Feature>& features, double tolerance, FeatureLayer& layer,
                       const ProgressSpan& progress) {
@@ -1279,11 +1293,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   undo_inexact_splits(mesh, area, labels, was_split, kExactFraction * layer.distance_tolerance, identify_points, curvature,
                       layer.features, layer.labels);
   compact_features(layer.labels, layer.features);
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    if (layer.labels[f] >= 0) {
-      layer.features[layer.labels[f]].area += area[f];
-      ++layer.features[layer.labels[f]].triangles;
-    }
+  count_faces(area, layer.labels, layer.features);
 
   // On a noisy mesh, features whose own points cannot fix an axis take a related feature's.
   if (!exact_mesh) {
@@ -1340,6 +1350,9 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     }
     stage("idealize");
   }
+  if (!exact_mesh && settle_tangent_boundaries(mesh, topology, layer.features, layer.relations, layer.labels) > 0)
+    count_faces(area, layer.labels, layer.features);
+  stage("tangent_boundaries");
   const ProgressSpan projection = progress.sub("projection", 0.99, 1.0);
   project_vertices(mesh, topology, layer.labels, layer.features, layer.distance_tolerance, layer, projection);
   stage("projection");

@@ -1,0 +1,126 @@
+#include "tangent_boundaries.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <utility>
+
+namespace idealize {
+namespace {
+
+// The surface through the touching curve of two tangent surfaces that separates them: a plane
+// (side = signed distance along `direction`) or a cylinder (side = distance from the axis minus
+// `radius`). `sign` turns the side positive towards the second feature of the pair.
+struct Separator {
+  bool cylinder = false;
+  Eigen::Vector3d origin, direction;
+  double radius = 0.0;
+  double sign = 1.0;
+
+  double side(const Eigen::Vector3d& p) const {
+    if (!cylinder) return sign * (p - origin).dot(direction);
+    return sign * (axial_coordinates(origin, direction, p).distance - radius);
+  }
+};
+
+std::optional<Separator> separator(const Surface& a, const Surface& b) {
+  if (a.type > b.type) return separator(b, a);  // Plane < Cylinder < Cone < Sphere < Torus
+  Separator s;
+  if (a.type == SurfaceType::Plane && b.type == SurfaceType::Cylinder) {
+    // The plane through the axis and the line where the cylinder touches the plane.
+    const Eigen::Vector3d towards_plane = (a.point - b.point).dot(a.axis) >= 0.0 ? a.axis : Eigen::Vector3d(-a.axis);
+    const Eigen::Vector3d normal = b.axis.cross(towards_plane);
+    if (normal.norm() < 0.5) return std::nullopt;  // not parallel: no touching line
+    s.origin = b.point;
+    s.direction = normal.normalized();
+    return s;
+  }
+  if (a.type == SurfaceType::Plane && b.type == SurfaceType::Torus) {
+    // The torus touches a plane across its axis along the circle of its major radius.
+    s.cylinder = true;
+    s.origin = b.point;
+    s.direction = b.axis;
+    s.radius = b.radius;
+    return s;
+  }
+  if (a.type == SurfaceType::Cylinder && (b.type == SurfaceType::Sphere || b.type == SurfaceType::Torus)) {
+    // Both touch the cylinder along the circle at the height of their centre.
+    s.origin = b.point;
+    s.direction = a.axis;
+    return s;
+  }
+  return std::nullopt;
+}
+
+Eigen::Vector3d centroid(const TriangleMesh& mesh, int f) {
+  return (mesh.V.row(mesh.F(f, 0)) + mesh.V.row(mesh.F(f, 1)) + mesh.V.row(mesh.F(f, 2))).transpose() / 3.0;
+}
+
+}  // namespace
+
+int settle_tangent_boundaries(const TriangleMesh& mesh, const MeshTopology& topology,
+                              const std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
+                              std::vector<int>& labels) {
+  const int n = mesh.num_faces();
+  std::vector<std::vector<int>> faces_of(features.size());
+  for (int f = 0; f < n; ++f)
+    if (labels[f] >= 0) faces_of[labels[f]].push_back(f);
+  std::map<std::pair<int, int>, Separator> separators;
+  for (const FeatureRelation& r : relations) {
+    if (r.kind != "tangent" || r.features.size() != 2) continue;
+    const int a = std::min(r.features[0], r.features[1]), b = std::max(r.features[0], r.features[1]);
+    std::optional<Separator> s = separator(features[a].surface, features[b].surface);
+    if (!s) continue;
+    // Oriented by where the two patches lie now: b's faces on the positive side on average.
+    double mean_a = 0.0, mean_b = 0.0;
+    for (int f : faces_of[a]) mean_a += s->side(centroid(mesh, f));
+    for (int f : faces_of[b]) mean_b += s->side(centroid(mesh, f));
+    mean_a /= std::max<size_t>(faces_of[a].size(), 1);
+    mean_b /= std::max<size_t>(faces_of[b].size(), 1);
+    if (mean_b < mean_a) s->sign = -1.0;
+    separators[{a, b}] = *s;
+  }
+  if (separators.empty()) return 0;
+
+  // Rounds over a frontier, each deciding from the labels of the round before (the result does not
+  // depend on the order of the faces); a moved face puts its neighbours on the next frontier.
+  std::vector<char> moved(n, 0);
+  std::vector<int> frontier;
+  for (int f = 0; f < n; ++f) frontier.push_back(f);
+  int total = 0;
+  while (!frontier.empty()) {
+    std::vector<std::pair<int, int>> moves;  // (face, new label)
+    for (int f : frontier) {
+      const int own = labels[f];
+      if (own < 0 || moved[f]) continue;
+      const Eigen::Vector3d c = centroid(mesh, f);
+      for (int k = 0; k < 3; ++k) {
+        const int g = topology.face_neighbor(f, k);
+        const int other = g < 0 ? -1 : labels[g];
+        if (other < 0 || other == own) continue;
+        const auto it = separators.find({std::min(own, other), std::max(own, other)});
+        if (it == separators.end()) continue;
+        const bool on_other_side = (it->second.side(c) > 0.0) == (other > own);
+        const Feature& taker = features[other];
+        if (on_other_side && std::abs(signed_distance(taker.surface, c)) <= 3.0 * taker.spread) {
+          moves.emplace_back(f, other);
+          break;
+        }
+      }
+    }
+    frontier.clear();
+    for (const auto& [f, label] : moves) {
+      labels[f] = label;
+      moved[f] = 1;
+      for (int k = 0; k < 3; ++k)
+        if (topology.face_neighbor(f, k) >= 0) frontier.push_back(topology.face_neighbor(f, k));
+    }
+    std::sort(frontier.begin(), frontier.end());
+    frontier.erase(std::unique(frontier.begin(), frontier.end()), frontier.end());
+    total += static_cast<int>(moves.size());
+  }
+  return total;
+}
+
+}  // namespace idealize
