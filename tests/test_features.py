@@ -673,3 +673,39 @@ def test_equal_radii_of_the_benchmarks_sculpted_plate():
     assert len(holes) >= 8
     groups = [set(r["features"]) for r in layer.relations if r["kind"] == "equal_radius"]
     assert any(holes <= g for g in groups), (holes, groups)
+
+
+@needs_freecad
+@shapes.needs_shared_data
+def test_fillet_strips_between_planes_of_the_benchmarks_scan_are_cylinders():
+    """The benchmark's scan of as_bb_boxblend_03 (rounded edges of r 5.08, 44 times the noise): across
+    the middle of such a fillet its sag hides in the noise, so a plane fits the strip there as well as
+    identification asks, and the planes beside it took the flanks. The cylinder tangent to both planes
+    fits the strip better than a plane: each of these fillets is one cylinder holding its face."""
+    m = shapes.benchmark_mesh("as_bb_boxblend_03.stp", "scan")
+    part = shapes.shared_part("as_bb_boxblend_03.stp")
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    areas = shapes.triangle_areas(m.V, m.F)
+    found = dominant(layer, m.gt, areas)
+    for face in (5, 12):  # both were planes: the strip of each fillet's middle
+        assert type(part.Faces[face].Surface).__name__ == "Cylinder"
+        f = found[face]
+        assert f["type"] == "cylinder" and abs(f["params"]["radius"] / 5.08 - 1) < 0.03, (face, f)
+        inside = m.gt == face
+        assert areas[inside & (layer.labels == f["id"])].sum() >= 0.9 * areas[inside].sum()
+
+
+@needs_freecad
+def test_chamfer_of_a_noisy_scan_stays_a_plane():
+    """A 45° chamfer between two faces of a box is a plane strip between two planes, like the middle
+    of a wide fillet; no cylinder tangent to both planes fits it better than its plane."""
+    FreeCAD, Part, _ = shapes.freecad()
+    box = Part.makeBox(10, 10, 10)
+    edge = [e for e in box.Edges if all(abs(v.Point.x - 10) < 1e-9 and abs(v.Point.y - 10) < 1e-9 for v in e.Vertexes)]
+    solid = box.makeChamfer(2.0, edge)
+    V, F, gt, diag = shapes.uniform_remesh(solid)
+    V = shapes.normal_noise(V, F, diag, 1)
+    layer = idealize.idealize(idealize.Mesh(V, F))
+    areas = shapes.triangle_areas(V, F)
+    assert layer.type_counts() == {"plane": 7}
+    assert correct_faces(layer.labels, gt, areas) == 7

@@ -932,6 +932,18 @@ void compact_features(std::vector<int>& labels, std::vector<Feature>& features) 
 // Moves every input vertex onto the surfaces of the features around it that explain it: onto the
 // one surface inside a patch, onto the intersection of two or three along edges and at corners
 // (alternating projections, which converge to the nearest common point of transversal surfaces).
+// The pairs (a < b) of features that share a mesh edge.
+std::vector<std::pair<int, int>> adjacent_features(const MeshTopology& topology, const std::vector<int>& labels) {
+  std::set<std::pair<int, int>> pairs;
+  for (size_t f = 0; f < labels.size(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(static_cast<int>(f), c);
+      if (g >= 0 && labels[f] >= 0 && labels[g] >= 0 && labels[f] != labels[g])
+        pairs.insert({std::min(labels[f], labels[g]), std::max(labels[f], labels[g])});
+    }
+  return {pairs.begin(), pairs.end()};
+}
+
 // Area and triangle count of each feature from the labels.
 void count_faces(const Eigen::VectorXd& area, const std::vector<int>& labels, std::vector<Feature>& features) {
   for (Feature& feature : features) {
@@ -1303,8 +1315,9 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     shared.distance_tolerance = layer.distance_tolerance;
     shared.residual_ratio = options.residual_ratio;
     shared.normal_floor = options.normal_floor_degrees * M_PI / 180.0;
-    fit_about_shared_axes(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size())), shared,
-                          layer.features);
+    const std::vector<PatchPoints> feature_points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+    fit_about_shared_axes(feature_points, shared, layer.features);
+    fillets_between_planes(feature_points, adjacent_features(topology, layer.labels), shared, layer.features);
   }
 
   // Freeform: the best fit is much worse than the typical patch of this mesh (which takes a few
@@ -1325,31 +1338,38 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   progress.sub("relations", 0.98, 0.99).step(0.0);
 
   const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
-  build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
-                      options.radius_tolerance, layer.adjacency, layer.relations);
-  stage("relations");
-  if (options.idealize) {
-    IdealizationOptions ideal;
-    ideal.angle_tolerance_degrees = options.angle_tolerance_degrees;
-    ideal.distance_tolerance = layer.distance_tolerance;
-    const std::vector<Feature> fitted = layer.features;
-    if (idealize_features(layer.features, layer.relations, ideal) > 0) {
-      // An ideal surface must still describe its patch: where it fits clearly worse than the fitted
-      // one (a direction that only looked ideal, radii that only looked equal), the fit stays.
-      points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
-      for (size_t p = 0; p < layer.features.size(); ++p) {
-        Feature& f = layer.features[p];
-        if (f.type == SurfaceType::Freeform) continue;
-        double rms, max_error;
-        fit_residuals(f.surface, points[p].points, points[p].weights, rms, max_error);
-        const double allowed = options.residual_ratio * fitted[p].rms + fitted[p].spread + floor;  // + one σ of noise
-        if (rms > allowed) f = fitted[p];
-      }
-      build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
-                          options.radius_tolerance, layer.adjacency, layer.relations);  // the graph of the ideal surfaces
+  auto build_graph = [&] {
+    build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
+                        options.radius_tolerance, layer.adjacency, layer.relations);
+  };
+  IdealizationOptions ideal;
+  ideal.angle_tolerance_degrees = options.angle_tolerance_degrees;
+  ideal.distance_tolerance = layer.distance_tolerance;
+  // The features become `fitted` made ideal under the relations found, where an ideal surface still
+  // describes its patch, and the graph that of the ideal surfaces.
+  auto idealize_fits = [&](const std::vector<Feature>& fitted) {
+    layer.features = fitted;
+    if (idealize_features(layer.features, layer.relations, ideal) == 0) return;
+    // An ideal surface must still describe its patch: where it fits clearly worse than the fitted
+    // one (a direction that only looked ideal, radii that only looked equal), the fit stays.
+    points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+    for (size_t p = 0; p < layer.features.size(); ++p) {
+      Feature& f = layer.features[p];
+      if (f.type == SurfaceType::Freeform) continue;
+      double rms, max_error;
+      fit_residuals(f.surface, points[p].points, points[p].weights, rms, max_error);
+      const double allowed = options.residual_ratio * fitted[p].rms + fitted[p].spread + floor;  // + one σ of noise
+      if (rms > allowed) f = fitted[p];
     }
-    stage("idealize");
-  }
+    build_graph();
+  };
+  const std::vector<Feature> fitted = layer.features;
+  build_graph();
+  stage("relations");
+  if (options.idealize) idealize_fits(fitted);
+  stage("idealize");
+  // The graph and the ideal surfaces stay as they are: refitting and idealizing the features whose
+  // borders moved shifts the radii of a sculpted part's equal fillets apart.
   if (!exact_mesh && settle_tangent_boundaries(mesh, topology, layer.features, layer.relations, layer.labels) > 0)
     count_faces(area, layer.labels, layer.features);
   stage("tangent_boundaries");

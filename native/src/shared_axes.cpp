@@ -1,7 +1,9 @@
 #include "shared_axes.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 namespace idealize {
 
@@ -56,7 +58,161 @@ double turn_across(const Surface& surface, const FitData& data) {
   return 2.0 * widest;
 }
 
+// The plane's normal pointing the way its patch's face normals do (out of the part).
+Eigen::Vector3d outward_normal(const Surface& plane, const FitData& data) {
+  const Eigen::Vector3d mean = data.sample_normals.transpose() * data.sample_weights;
+  return mean.dot(plane.axis) >= 0.0 ? plane.axis : Eigen::Vector3d(-plane.axis);
+}
+
+// The cylinder tangent to the planes (outward normals n1, n2 through p1, p2) that fits `data` best:
+// its axis runs parallel to their intersection line at distance r from both, inside the part (a
+// rounded edge) or outside (a filleted inner corner). The weighted mean square distance is searched
+// over log r, on a grid first and then by golden section; with `radius` > 0 only the side is chosen.
+// Invalid for parallel planes.
+SurfaceFit tangent_cylinder(const FitData& data, const Eigen::Vector3d& n1, const Eigen::Vector3d& p1,
+                            const Eigen::Vector3d& n2, const Eigen::Vector3d& p2, double radius = 0.0) {
+  SurfaceFit best;
+  const Eigen::Vector3d direction = n1.cross(n2);
+  if (direction.norm() < 1e-6) return best;
+  Eigen::Matrix3d planes;
+  planes << n1.transpose(), n2.transpose(), direction.normalized().transpose();
+  const Eigen::Vector3d on_line = planes.colPivHouseholderQr().solve(Eigen::Vector3d(n1.dot(p1), n2.dot(p2), 0.0));
+  const Eigen::Vector3d towards_axis = (n1 + n2) / (1.0 + n1.dot(n2));  // one unit from each plane
+  const double extent = (data.points.colwise().maxCoeff() - data.points.colwise().minCoeff()).norm();
+  if (!(extent > 0.0) || !(data.weights.sum() > 0.0)) return best;
+  for (double side : {-1.0, 1.0}) {
+    Surface cylinder;
+    cylinder.type = SurfaceType::Cylinder;
+    cylinder.axis = direction.normalized();
+    auto mean_square = [&](double log_r) {
+      cylinder.radius = std::exp(log_r);
+      cylinder.point = on_line + side * cylinder.radius * towards_axis;
+      double rms, max_error;
+      fit_residuals(cylinder, data.points, data.weights, rms, max_error);
+      return rms * rms;
+    };
+    // From a thousandth of the strip's size to a hundred times it (a shallow blend of a wide radius).
+    auto search = [&] {
+      const double low = std::log(1e-3 * extent), high = std::log(1e2 * extent);
+      constexpr int kGrid = 60;
+      int arg = 0;
+      double least = std::numeric_limits<double>::infinity();
+      for (int i = 0; i <= kGrid; ++i) {
+        const double value = mean_square(low + (high - low) * i / kGrid);
+        if (value < least) least = value, arg = i;
+      }
+      double a = low + (high - low) * std::max(arg - 1, 0) / kGrid;
+      double b = low + (high - low) * std::min(arg + 1, kGrid) / kGrid;
+      const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+      for (int i = 0; i < 40; ++i) {
+        const double x1 = b - golden * (b - a), x2 = a + golden * (b - a);
+        if (mean_square(x1) < mean_square(x2)) b = x2;
+        else a = x1;
+      }
+      return 0.5 * (a + b);
+    };
+    SurfaceFit fit;
+    mean_square(radius > 0.0 ? std::log(radius) : search());
+    fit.surface = cylinder;
+    fit.valid = true;
+    fit_residuals(cylinder, data.points, data.weights, fit.rms, fit.max_error);
+    if (!best.valid || fit.rms < best.rms) best = fit;
+  }
+  return best;
+}
+
+// The points of a plane's patch that lie on the arc of a cylinder tangent to it, within `reach` of the
+// cylinder: past the line where the cylinder touches the plane (`to_plane`, the unit direction from
+// the axis to it), towards `other` (the same for the other plane the cylinder touches).
+FitData flank(const FitData& plane, const Surface& cylinder, const Eigen::Vector3d& to_plane,
+              const Eigen::Vector3d& other, double reach) {
+  const Eigen::Vector3d into_arc = (other - other.dot(to_plane) * to_plane).normalized();
+  auto on_arc = [&](const Eigen::Vector3d& x) {
+    return (x - cylinder.point).dot(into_arc) > 0.0 && std::abs(signed_distance(cylinder, x)) <= reach;
+  };
+  FitData out;
+  std::vector<Eigen::Index> keep, keep_samples;
+  for (Eigen::Index i = 0; i < plane.points.rows(); ++i)
+    if (on_arc(plane.points.row(i).transpose())) keep.push_back(i);
+  for (Eigen::Index i = 0; i < plane.sample_points.rows(); ++i)
+    if (on_arc(plane.sample_points.row(i).transpose())) keep_samples.push_back(i);
+  out.points = plane.points(keep, Eigen::all);
+  out.weights = plane.weights(keep);
+  out.sample_points = plane.sample_points(keep_samples, Eigen::all);
+  out.sample_normals = plane.sample_normals(keep_samples, Eigen::all);
+  out.sample_weights = plane.sample_weights(keep_samples);
+  return out;
+}
+
 }  // namespace
+
+int fillets_between_planes(const std::vector<FitData>& points, const std::vector<std::pair<int, int>>& adjacent,
+                           const SharedAxisOptions& options, std::vector<Feature>& features) {
+  std::vector<std::vector<int>> planes_beside(features.size());
+  for (const auto& [a, b] : adjacent)
+    if (features[a].type == SurfaceType::Plane && features[b].type == SurfaceType::Plane) {
+      planes_beside[a].push_back(b);
+      planes_beside[b].push_back(a);
+    }
+  auto angle = [](const Eigen::Vector3d& x, const Eigen::Vector3d& y) { return std::acos(std::clamp(x.dot(y), -1.0, 1.0)); };
+  // Decided on the planes as they were: a strip that became a cylinder is no plane beside another.
+  const std::vector<Feature> before = features;
+  int changed = 0;
+  for (size_t s = 0; s < features.size(); ++s) {
+    const FitData& data = points[s];
+    if (before[s].type != SurfaceType::Plane || data.points.rows() < 2 * parameter_count(SurfaceType::Cylinder)) continue;
+    SurfaceFit strip;
+    strip.surface = before[s].surface;
+    fit_residuals(strip.surface, data.points, data.weights, strip.rms, strip.max_error);
+    const Eigen::Vector3d n = outward_normal(strip.surface, data);
+    SurfaceFit best;
+    const std::vector<int>& beside = planes_beside[s];
+    std::array<Eigen::Vector3d, 4> best_planes;  // n1, p1, n2, p2
+    std::array<int, 2> best_pair{};
+    for (size_t i = 0; i < beside.size(); ++i)
+      for (size_t j = i + 1; j < beside.size(); ++j) {
+        const Feature &f1 = before[beside[i]], &f2 = before[beside[j]];
+        const Eigen::Vector3d n1 = outward_normal(f1.surface, points[beside[i]]);
+        const Eigen::Vector3d n2 = outward_normal(f2.surface, points[beside[j]]);
+        const double turn = angle(n1, n2);
+        if (turn < options.angle_tolerance || turn > M_PI - options.angle_tolerance) continue;
+        if (angle(n1, n) + angle(n, n2) > turn + options.angle_tolerance) continue;  // not between them
+        const SurfaceFit fit = tangent_cylinder(data, n1, f1.surface.point, n2, f2.surface.point);
+        if (fit.valid && fit.rms < strip.rms && (!best.valid || fit.rms < best.rms)) {
+          best = fit;
+          best_planes = {n1, f1.surface.point, n2, f2.surface.point};
+          best_pair = {beside[i], beside[j]};
+        }
+      }
+    if (!best.valid) continue;
+    measure_spreads(data, best);
+    measure_spreads(data, strip);
+    if (best.spread >= strip.spread ||
+        best.normal_spread > options.residual_ratio * strip.normal_spread + options.normal_floor)
+      continue;
+    // The radius from the whole arc: the planes beside the strip still hold its flanks, which pull
+    // the tangent cylinder's radius short by a few percent. Fitted freely to the strip and the
+    // flanks, and placed against the planes again.
+    const Surface& c = best.surface;
+    auto touching = [&](const Eigen::Vector3d& outward, const Eigen::Vector3d& on_plane) {
+      return (on_plane - c.point).dot(outward) >= 0.0 ? outward : Eigen::Vector3d(-outward);
+    };
+    const Eigen::Vector3d u1 = touching(best_planes[0], best_planes[1]), u2 = touching(best_planes[2], best_planes[3]);
+    const double reach = 3.0 * best.spread;
+    const FitData arc = concatenate(concatenate(data, flank(points[best_pair[0]], c, u1, u2, reach)),
+                                    flank(points[best_pair[1]], c, u2, u1, reach));
+    const SurfaceFit free = fit_surface(SurfaceType::Cylinder, arc, FitOptions(), &best.surface);
+    if (free.valid) {
+      SurfaceFit placed = tangent_cylinder(data, best_planes[0], best_planes[1], best_planes[2], best_planes[3],
+                                           free.surface.radius);
+      if (placed.valid) measure_spreads(data, placed);
+      if (placed.valid && placed.spread < strip.spread) best = placed;
+    }
+    features[s].set_fit(best);
+    ++changed;
+  }
+  return changed;
+}
 
 int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOptions& options,
                           std::vector<Feature>& features) {

@@ -7,6 +7,7 @@
 #include "feature_layer.h"
 #include "surface_fitting.h"
 
+#include <utility>
 #include <vector>
 
 namespace idealize {
@@ -34,5 +35,17 @@ struct SharedAxisOptions {
 // Returns the number of features that changed.
 int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOptions& options,
                           std::vector<Feature>& features);
+
+// Fillets between planes that a plane fits: across a strip of a fillet that turns by a few tens of
+// degrees a radius of forty times the noise sags by about twice the noise, within what identification
+// allows a plane, and the planes beside it take its flanks. The cylinder tangent to two adjacent
+// planes has one free parameter, its radius (its axis runs along their line of intersection, the
+// radius from each); a plane between them (its normal between theirs) whose points that cylinder
+// fits better than the plane becomes it, with the radius of the cylinder fitted freely to its points
+// (the planes still hold its flanks, which pull the tangent one's radius short by a few percent).
+// A chamfer's points fit no such cylinder better than their plane. `adjacent`: pairs of features
+// sharing a border. Returns the number of features changed.
+int fillets_between_planes(const std::vector<FitData>& points, const std::vector<std::pair<int, int>>& adjacent,
+                           const SharedAxisOptions& options, std::vector<Feature>& features);
 
 }  // namespace idealize

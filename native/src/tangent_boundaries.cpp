@@ -72,13 +72,13 @@ int settle_tangent_boundaries(const TriangleMesh& mesh, const MeshTopology& topo
     const int a = std::min(r.features[0], r.features[1]), b = std::max(r.features[0], r.features[1]);
     std::optional<Separator> s = separator(features[a].surface, features[b].surface);
     if (!s) continue;
-    // Oriented by where the two patches lie now: b's faces on the positive side on average.
-    double mean_a = 0.0, mean_b = 0.0;
-    for (int f : faces_of[a]) mean_a += s->side(centroid(mesh, f));
-    for (int f : faces_of[b]) mean_b += s->side(centroid(mesh, f));
-    mean_a /= std::max<size_t>(faces_of[a].size(), 1);
-    mean_b /= std::max<size_t>(faces_of[b].size(), 1);
-    if (mean_b < mean_a) s->sign = -1.0;
+    // Oriented so that b lies on the positive side, by where the patch of the more curved surface
+    // lies: all on one side of the touching curve (a fillet's arc starts there), where the other
+    // may lie on both (a plane around a boss).
+    const int curved = features[a].surface.type > features[b].surface.type ? a : b;
+    double mean = 0.0;
+    for (int f : faces_of[curved]) mean += s->side(centroid(mesh, f));
+    if ((mean < 0.0) == (curved == b)) s->sign = -1.0;
     separators[{a, b}] = *s;
   }
   if (separators.empty()) return 0;
