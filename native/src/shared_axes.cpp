@@ -80,6 +80,11 @@ SurfaceFit tangent_cylinder(const FitData& data, const Eigen::Vector3d& n1, cons
   const Eigen::Vector3d towards_axis = (n1 + n2) / (1.0 + n1.dot(n2));  // one unit from each plane
   const double extent = (data.points.colwise().maxCoeff() - data.points.colwise().minCoeff()).norm();
   if (!(extent > 0.0) || !(data.weights.sum() > 0.0)) return best;
+  // The search runs on an even subsample of a large patch (as the fits' refinement does).
+  const Eigen::Index step = std::max<Eigen::Index>(1, data.points.rows() / FitOptions().max_points);
+  const Eigen::Index count = (data.points.rows() + step - 1) / step;
+  const MatrixX3d sample = data.points(Eigen::seqN(0, count, step), Eigen::all);
+  const Eigen::VectorXd sample_weights = data.weights(Eigen::seqN(0, count, step));
   for (double side : {-1.0, 1.0}) {
     Surface cylinder;
     cylinder.type = SurfaceType::Cylinder;
@@ -88,7 +93,7 @@ SurfaceFit tangent_cylinder(const FitData& data, const Eigen::Vector3d& n1, cons
       cylinder.radius = std::exp(log_r);
       cylinder.point = on_line + side * cylinder.radius * towards_axis;
       double rms, max_error;
-      fit_residuals(cylinder, data.points, data.weights, rms, max_error);
+      fit_residuals(cylinder, sample, sample_weights, rms, max_error);
       return rms * rms;
     };
     // From a thousandth of the strip's size to a hundred times it (a shallow blend of a wide radius).
