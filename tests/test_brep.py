@@ -333,3 +333,21 @@ def test_noisy_scan_of_a_corner_ball_gives_its_solid():
     assert solid.surface_types == surface_types(part)
     assert solid.faces == len(part.Faces)
     assert abs(solid.volume / part.Volume - 1) < 5e-3
+
+
+@needs_freecad
+@shapes.needs_shared_data
+def test_faces_of_a_shell_that_does_not_close_pass_the_boolean_checks():
+    """The benchmark's scan of as_circular_blend_01 does not close. Some of its faces were bounded by
+    edges that cross each other or leave the surface, or by a boundary running the wrong way round
+    (a torus face of negative area): BRepCheck passed them, and OpenCASCADE's mesher never returned
+    on the torus face (the deviation check hung). Such faces are left out and named."""
+    m = shapes.benchmark_mesh("as_circular_blend_01.step", "scan")
+    solid = idealize.make_solid(idealize.idealize(Mesh(m.V, m.F)))
+    assert not solid.solid and solid.valid
+    shape = solid.part_shape()
+    for face in shape.Faces:
+        face.check(True)  # raises on what the boolean operations' analyzer finds
+        assert face.Area > 0
+    assert np.isfinite(solid.max_deviation)
+    assert any("not valid" in message for _, message in solid.problems), solid.problems

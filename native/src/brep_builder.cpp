@@ -4,6 +4,7 @@
 #include "occt_signals.h"
 
 #include <BRepAdaptor_Surface.hxx>
+#include <BOPAlgo_ArgumentAnalyzer.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_Sewing.hxx>
 #include <BRepCheck.hxx>
@@ -1053,16 +1054,37 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   // Validated by assemble; an invalid result keeps only its valid faces, as a shell (never an
   // invalid solid).
   result.solid = result.valid && result.closed && shape.ShapeType() == TopAbs_SOLID;
-  if (!result.valid) {
+  if (!result.solid) {
+    // The faces of a shell that did not close may be bounded by edges that cross themselves or
+    // leave the surface, or run the wrong way round (the face would cover the rest of a torus: its
+    // area comes out negative), which BRepCheck passes but OpenCASCADE's mesher (and every
+    // modelling operation) chokes on (the mesher never returned on such a torus face): only faces
+    // that pass the boolean operations' checks are kept.
     BRep_Builder builder;
     TopoDS_Compound kept_faces;
     builder.MakeCompound(kept_faces);
+    bool dropped = false;
     for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
-      if (BRepCheck_Analyzer(e.Current()).IsValid()) {
+      const bool valid = BRepCheck_Analyzer(e.Current()).IsValid();
+      std::string reason = valid ? "" : invalid_reason(e.Current());
+      GProp_GProps area;
+      BRepGProp::SurfaceProperties(e.Current().Oriented(TopAbs_FORWARD), area);
+      if (valid && area.Mass() < 0.0) reason = "its boundary runs the wrong way round";
+      if (reason.empty()) {
+        BOPAlgo_ArgumentAnalyzer analyzer;
+        analyzer.SetShape1(e.Current());
+        analyzer.ArgumentTypeMode() = Standard_False;
+        analyzer.SelfInterMode() = Standard_True;
+        analyzer.CurveOnSurfaceMode() = Standard_True;
+        analyzer.Perform();
+        if (analyzer.HasFaulty()) reason = "its edges cross each other or leave its surface";
+      }
+      if (reason.empty()) {
         builder.Add(kept_faces, e.Current());
       } else {
+        dropped = true;
         const Handle(Geom_Surface) surface = BRep_Tool::Surface(TopoDS::Face(e.Current()));
-        const std::string message = "its face is not valid (" + invalid_reason(e.Current()) + ")";
+        const std::string message = "its face is not valid (" + reason + ")";
         bool found = false;
         for (int r = 0; r < regions; ++r) {
           if (region_surfaces_[r] == surface) {
@@ -1074,8 +1096,10 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
         if (!found) result.problems.push_back({-1, std::string("a ") + occt_surface_name(TopoDS::Face(e.Current())) + " face: " + message.substr(4)});
       }
     }
-    shape = kept_faces;
-    result.valid = BRepCheck_Analyzer(shape).IsValid();  // what is returned: the valid faces
+    if (dropped || !result.valid) {  // the sewn shell when it is valid and every face is kept
+      shape = kept_faces;
+      result.valid = BRepCheck_Analyzer(shape).IsValid();  // what is returned: the valid faces
+    }
   }
   if (!result.closed) result.problems.push_back({-1, "the faces do not close into a solid (free edges remain)"});
   result.shape = shape;

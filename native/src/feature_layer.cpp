@@ -431,7 +431,7 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
   // coarse torus exceeds it (the CAD tessellations of the benchmark: up to 54° inside tori, 22°
   // inside any other face).
   std::vector<std::pair<int, int>> pairs;
-  const std::map<std::pair<int, int>, double> turns = boundary_turns(mesh, topology, labels, exact);
+  const std::map<std::pair<int, int>, double> turns = boundary_turns(mesh, topology, labels, true);
   auto inside_turn = [&](int p) {
     const auto it = turns.find({p, p});
     return it == turns.end() ? 0.0 : it->second;
@@ -450,6 +450,7 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
   std::vector<Candidate> candidates;
   std::vector<std::pair<int, int>> absorbed;  // (large, piece): the large patch's surface explains the piece
   const double normal_floor = options.normal_floor_degrees * M_PI / 180.0;
+  const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
   for (size_t i = 0; i < pairs.size(); ++i) {
     progress.step(static_cast<double>(i) / pairs.size());
     const auto [a, b] = pairs[i];
@@ -495,9 +496,19 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     // Two large patches of different types make one surface only on an exact tessellation: a coarse
     // torus falls into bands between its meridians, each of which a cylinder or cone fits exactly.
     if (!same_type && !a_small && !b_small && !exact) continue;
+    // Two planes that meet at less than the angle tolerance without a crease (no facet turns more
+    // across their border than inside either) are one plane where it explains each part (below: not
+    // a step): a sculpted face's undulation bends it by more than its pieces' fits allow a merge,
+    // but not by an edge. Idealization would make them parallel, and so, sharing a border, coplanar.
+    const auto border = turns.find({std::min(a, b), std::max(a, b)});
+    const bool one_plane = same_type && fa.type == SurfaceType::Plane &&
+                           std::abs(fa.surface.axis.dot(fb.surface.axis)) >= std::cos(angle_tolerance) &&
+                           border != turns.end() && border->second <= std::max(inside_turn(a), inside_turn(b));
     const PatchPoints both = concatenate(pa, pb);
     auto accepted = [&](const Feature& u) {
-      if (u.type == SurfaceType::Freeform || u.rms > limit || u.normal_rms > normal_limit) return false;
+      if (u.type == SurfaceType::Freeform) return false;
+      if (!(!exact && one_plane && u.type == SurfaceType::Plane) && (u.rms > limit || u.normal_rms > normal_limit))
+        return false;
       if (!exact) {
         // An RMS over the union hides a small foreign part (a pocket's wall in a large plane, whose
         // RMS then lets the next one in).
