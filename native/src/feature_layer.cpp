@@ -1349,36 +1349,31 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   progress.sub("relations", 0.98, 0.99).step(0.0);
 
   const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
-  auto build_graph = [&] {
-    build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
-                        options.radius_tolerance, layer.adjacency, layer.relations);
-  };
-  IdealizationOptions ideal;
-  ideal.angle_tolerance_degrees = options.angle_tolerance_degrees;
-  ideal.distance_tolerance = layer.distance_tolerance;
-  // The features become `fitted` made ideal under the relations found, where an ideal surface still
-  // describes its patch, and the graph that of the ideal surfaces.
-  auto idealize_fits = [&](const std::vector<Feature>& fitted) {
-    layer.features = fitted;
-    if (idealize_features(layer.features, layer.relations, ideal) == 0) return;
-    // An ideal surface must still describe its patch: where it fits clearly worse than the fitted
-    // one (a direction that only looked ideal, radii that only looked equal), the fit stays.
-    points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
-    for (size_t p = 0; p < layer.features.size(); ++p) {
-      Feature& f = layer.features[p];
-      if (f.type == SurfaceType::Freeform) continue;
-      double rms, max_error;
-      fit_residuals(f.surface, points[p].points, points[p].weights, rms, max_error);
-      const double allowed = options.residual_ratio * fitted[p].rms + fitted[p].spread + floor;  // + one σ of noise
-      if (rms > allowed) f = fitted[p];
-    }
-    build_graph();
-  };
-  const std::vector<Feature> fitted = layer.features;
-  build_graph();
+  build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
+                      options.radius_tolerance, layer.adjacency, layer.relations);
   stage("relations");
-  if (options.idealize) idealize_fits(fitted);
-  stage("idealize");
+  if (options.idealize) {
+    IdealizationOptions ideal;
+    ideal.angle_tolerance_degrees = options.angle_tolerance_degrees;
+    ideal.distance_tolerance = layer.distance_tolerance;
+    const std::vector<Feature> fitted = layer.features;
+    if (idealize_features(layer.features, layer.relations, ideal) > 0) {
+      // An ideal surface must still describe its patch: where it fits clearly worse than the fitted
+      // one (a direction that only looked ideal, radii that only looked equal), the fit stays.
+      points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+      for (size_t p = 0; p < layer.features.size(); ++p) {
+        Feature& f = layer.features[p];
+        if (f.type == SurfaceType::Freeform) continue;
+        double rms, max_error;
+        fit_residuals(f.surface, points[p].points, points[p].weights, rms, max_error);
+        const double allowed = options.residual_ratio * fitted[p].rms + fitted[p].spread + floor;  // + one σ of noise
+        if (rms > allowed) f = fitted[p];
+      }
+      build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
+                          options.radius_tolerance, layer.adjacency, layer.relations);  // the graph of the ideal surfaces
+    }
+    stage("idealize");
+  }
   // The graph and the ideal surfaces stay as they are: refitting and idealizing the features whose
   // borders moved shifts the radii of a sculpted part's equal fillets apart.
   if (!exact_mesh && settle_tangent_boundaries(mesh, topology, layer.features, layer.relations, layer.labels) > 0)
