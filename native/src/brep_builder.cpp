@@ -906,6 +906,24 @@ std::string invalid_reason(const TopoDS_Shape& face) {
   return "unknown";
 }
 
+// Why a face of a shell that did not close cannot be kept (empty: it can). Its edges may cross
+// themselves or leave the surface, or its boundary run the wrong way round (the face would cover the
+// rest of a torus: its area comes out negative), which BRepCheck passes but OpenCASCADE's mesher
+// (and every modelling operation) chokes on: the mesher never returned on such a torus face.
+std::string shell_face_fault(const TopoDS_Shape& face) {
+  if (!BRepCheck_Analyzer(face).IsValid()) return invalid_reason(face);
+  GProp_GProps area;
+  BRepGProp::SurfaceProperties(face.Oriented(TopAbs_FORWARD), area);
+  if (area.Mass() < 0.0) return "its boundary runs the wrong way round";
+  BOPAlgo_ArgumentAnalyzer analyzer;
+  analyzer.SetShape1(face);
+  analyzer.ArgumentTypeMode() = Standard_False;
+  analyzer.SelfInterMode() = Standard_True;
+  analyzer.CurveOnSurfaceMode() = Standard_True;
+  analyzer.Perform();
+  return analyzer.HasFaulty() ? "its edges cross each other or leave its surface" : "";
+}
+
 // An edge used by one face only (seams, used twice by their face, and degenerate edges aside).
 bool has_free_edges(const TopoDS_Shape& shape) {
   TopTools_IndexedDataMapOfShapeListOfShape faces_of_edge;
@@ -1055,30 +1073,13 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   // invalid solid).
   result.solid = result.valid && result.closed && shape.ShapeType() == TopAbs_SOLID;
   if (!result.solid) {
-    // The faces of a shell that did not close may be bounded by edges that cross themselves or
-    // leave the surface, or run the wrong way round (the face would cover the rest of a torus: its
-    // area comes out negative), which BRepCheck passes but OpenCASCADE's mesher (and every
-    // modelling operation) chokes on (the mesher never returned on such a torus face): only faces
-    // that pass the boolean operations' checks are kept.
+    // Only the faces that pass the boolean operations' checks are kept (shell_face_fault).
     BRep_Builder builder;
     TopoDS_Compound kept_faces;
     builder.MakeCompound(kept_faces);
     bool dropped = false;
     for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
-      const bool valid = BRepCheck_Analyzer(e.Current()).IsValid();
-      std::string reason = valid ? "" : invalid_reason(e.Current());
-      GProp_GProps area;
-      BRepGProp::SurfaceProperties(e.Current().Oriented(TopAbs_FORWARD), area);
-      if (valid && area.Mass() < 0.0) reason = "its boundary runs the wrong way round";
-      if (reason.empty()) {
-        BOPAlgo_ArgumentAnalyzer analyzer;
-        analyzer.SetShape1(e.Current());
-        analyzer.ArgumentTypeMode() = Standard_False;
-        analyzer.SelfInterMode() = Standard_True;
-        analyzer.CurveOnSurfaceMode() = Standard_True;
-        analyzer.Perform();
-        if (analyzer.HasFaulty()) reason = "its edges cross each other or leave its surface";
-      }
+      const std::string reason = shell_face_fault(e.Current());
       if (reason.empty()) {
         builder.Add(kept_faces, e.Current());
       } else {

@@ -36,10 +36,6 @@ std::vector<int> twin_halfedges(const TriangleMesh& mesh, const MeshTopology& to
   return twin;
 }
 
-Eigen::Vector3d face_centroid(const TriangleMesh& mesh, int f) {
-  return (mesh.V.row(mesh.F(f, 0)) + mesh.V.row(mesh.F(f, 1)) + mesh.V.row(mesh.F(f, 2))).transpose() / 3.0;
-}
-
 double surface_gap(const Surface& surface, const Eigen::Vector3d& p) {
   if (surface.type == SurfaceType::Freeform) return std::numeric_limits<double>::max();
   return std::abs(signed_distance(surface, p));

@@ -199,9 +199,7 @@ double face_misfit(const TriangleMesh& mesh, int f, const Surface& surface, doub
   double worst = 0.0;
   for (int k = 0; k < 3; ++k)
     worst = std::max(worst, std::abs(signed_distance(surface, mesh.V.row(mesh.F(f, k)).transpose())) / distance_unit);
-  const Eigen::Vector3d centroid =
-      (mesh.V.row(mesh.F(f, 0)) + mesh.V.row(mesh.F(f, 1)) + mesh.V.row(mesh.F(f, 2))).transpose() / 3.0;
-  const double cosine = std::abs(face_normal(mesh, f).dot(surface_normal(surface, centroid)));
+  const double cosine = std::abs(face_normal(mesh, f).dot(surface_normal(surface, face_centroid(mesh, f))));
   return std::max(worst, std::acos(std::min(cosine, 1.0)) / angle_unit);
 }
 
@@ -695,7 +693,7 @@ int split_patch(const TriangleMesh& mesh, const MeshTopology& topology, const Ei
     Surface plane;
     plane.type = SurfaceType::Plane;
     plane.axis = face_normal(mesh, seed);
-    plane.point = (mesh.V.row(mesh.F(seed, 0)) + mesh.V.row(mesh.F(seed, 1)) + mesh.V.row(mesh.F(seed, 2))).transpose() / 3.0;
+    plane.point = face_centroid(mesh, seed);
     std::vector<int> region{seed}, queue{seed};
     open[seed] = kGrown;
     size_t fitted = 1;
@@ -943,18 +941,6 @@ void compact_features(std::vector<int>& labels, std::vector<Feature>& features) 
 // Moves every input vertex onto the surfaces of the features around it that explain it: onto the
 // one surface inside a patch, onto the intersection of two or three along edges and at corners
 // (alternating projections, which converge to the nearest common point of transversal surfaces).
-// The pairs (a < b) of features that share a mesh edge.
-std::vector<std::pair<int, int>> adjacent_features(const MeshTopology& topology, const std::vector<int>& labels) {
-  std::set<std::pair<int, int>> pairs;
-  for (size_t f = 0; f < labels.size(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int g = topology.face_neighbor(static_cast<int>(f), c);
-      if (g >= 0 && labels[f] >= 0 && labels[g] >= 0 && labels[f] != labels[g])
-        pairs.insert({std::min(labels[f], labels[g]), std::max(labels[f], labels[g])});
-    }
-  return {pairs.begin(), pairs.end()};
-}
-
 // Area and triangle count of each feature from the labels.
 void count_faces(const Eigen::VectorXd& area, const std::vector<int>& labels, std::vector<Feature>& features) {
   for (Feature& feature : features) {
@@ -1328,7 +1314,9 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     shared.normal_floor = options.normal_floor_degrees * M_PI / 180.0;
     const std::vector<PatchPoints> feature_points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
     fit_about_shared_axes(feature_points, shared, layer.features);
-    fillets_between_planes(feature_points, adjacent_features(topology, layer.labels), shared, layer.features);
+    std::vector<std::pair<int, int>> adjacent;  // the pairs of features that share a mesh edge
+    for (const auto& [pair, turn] : boundary_turns(mesh, topology, layer.labels)) adjacent.push_back(pair);
+    fillets_between_planes(feature_points, adjacent, shared, layer.features);
   }
 
   // Freeform: the best fit is much worse than the typical patch of this mesh (which takes a few

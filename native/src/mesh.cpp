@@ -127,6 +127,10 @@ Eigen::Vector3d face_normal(const TriangleMesh& mesh, int f) {
   return (b - a).cross(c - a).normalized();
 }
 
+Eigen::Vector3d face_centroid(const TriangleMesh& mesh, int f) {
+  return (mesh.V.row(mesh.F(f, 0)) + mesh.V.row(mesh.F(f, 1)) + mesh.V.row(mesh.F(f, 2))).transpose() / 3.0;
+}
+
 Eigen::VectorXd face_areas(const TriangleMesh& mesh) {
   Eigen::VectorXd areas(mesh.num_faces());
   for (int f = 0; f < mesh.num_faces(); ++f) {

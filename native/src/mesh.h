@@ -84,6 +84,9 @@ Eigen::VectorXd face_areas(const TriangleMesh& mesh);
 // Unit normal of face f (NaN for a degenerate face).
 Eigen::Vector3d face_normal(const TriangleMesh& mesh, int f);
 
+// Centroid of face f.
+Eigen::Vector3d face_centroid(const TriangleMesh& mesh, int f);
+
 // Length of the bounding-box diagonal (0 for an empty mesh).
 double bounding_box_diagonal(const TriangleMesh& mesh);
 

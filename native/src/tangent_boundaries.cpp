@@ -53,10 +53,6 @@ std::optional<Separator> separator(const Surface& a, const Surface& b) {
   return std::nullopt;
 }
 
-Eigen::Vector3d centroid(const TriangleMesh& mesh, int f) {
-  return (mesh.V.row(mesh.F(f, 0)) + mesh.V.row(mesh.F(f, 1)) + mesh.V.row(mesh.F(f, 2))).transpose() / 3.0;
-}
-
 }  // namespace
 
 int settle_tangent_boundaries(const TriangleMesh& mesh, const MeshTopology& topology,
@@ -77,7 +73,7 @@ int settle_tangent_boundaries(const TriangleMesh& mesh, const MeshTopology& topo
     // may lie on both (a plane around a boss).
     const int curved = features[a].surface.type > features[b].surface.type ? a : b;
     double mean = 0.0;
-    for (int f : faces_of[curved]) mean += s->side(centroid(mesh, f));
+    for (int f : faces_of[curved]) mean += s->side(face_centroid(mesh, f));
     if ((mean < 0.0) == (curved == b)) s->sign = -1.0;
     separators[{a, b}] = *s;
   }
@@ -94,7 +90,7 @@ int settle_tangent_boundaries(const TriangleMesh& mesh, const MeshTopology& topo
     for (int f : frontier) {
       const int own = labels[f];
       if (own < 0 || moved[f]) continue;
-      const Eigen::Vector3d c = centroid(mesh, f);
+      const Eigen::Vector3d c = face_centroid(mesh, f);
       for (int k = 0; k < 3; ++k) {
         const int g = topology.face_neighbor(f, k);
         const int other = g < 0 ? -1 : labels[g];
