@@ -1,6 +1,7 @@
 #include "feature_layer.h"
 #include "relaxation.h"
 
+#include "edge_fillets.h"
 #include "feature_graph.h"
 #include "idealization.h"
 #include "shared_axes.h"
@@ -1317,6 +1318,31 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     std::vector<std::pair<int, int>> adjacent;  // the pairs of features that share a mesh edge
     for (const auto& [pair, turn] : boundary_turns(mesh, topology, layer.labels)) adjacent.push_back(pair);
     fillets_between_planes(feature_points, adjacent, shared, layer.features);
+    // Fillets too narrow for a patch of their own, which the planes beside them took: the new
+    // cylinders keep the surface the edge's band fixed, the planes are refitted without them.
+    EdgeFilletOptions edges;
+    edges.angle_tolerance = shared.angle_tolerance;
+    edges.residual_ratio = options.residual_ratio;
+    const std::vector<char> rounded = round_plane_edges(mesh, topology, edges, layer.features, layer.labels);
+    if (std::find(rounded.begin(), rounded.end(), 1) != rounded.end()) {
+      const std::vector<PatchPoints> now = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+      for (size_t p = 0; p < layer.features.size(); ++p) {
+        if (!rounded[p]) continue;
+        Feature& f = layer.features[p];
+        SurfaceFit fit;
+        if (f.type == SurfaceType::Plane) fit = fit_surface(SurfaceType::Plane, now[p], options.fit, &f.surface);
+        if (!fit.valid) {
+          fit.surface = f.surface;
+          fit.valid = true;
+          fit_residuals(fit.surface, now[p].points, now[p].weights, fit.rms, fit.max_error);
+          measure_spreads(now[p], fit);
+        }
+        f.set_fit(fit);
+        f.vertices = static_cast<int>(now[p].points.rows());
+      }
+      count_faces(area, layer.labels, layer.features);
+    }
+    stage("edge_fillets");
   }
 
   // Freeform: the best fit is much worse than the typical patch of this mesh (which takes a few
