@@ -32,8 +32,8 @@ struct EdgeFilletOptions {
   // The shortest arc (in median edge lengths) that is a fillet: uniform re-tessellation cuts a sharp
   // edge with a strip of facets up to an edge wide, and a sculpted mesh's displacement along vertex
   // normals (averaged across the edge) rounds it over as much. Measured on the benchmark: the
-  // roundings fitted at sharp edges spanned at most 1.03 edges, the narrowest true fillets 1.3.
-  double shortest_arc = 1.25;
+  // roundings fitted at sharp edges spanned at most 1.03 edges, the narrowest true fillets 1.25-1.3.
+  double shortest_arc = 1.15;
 };
 
 // Finds the rounded edges between adjacent plane features of a noisy mesh and appends a cylinder
