@@ -764,3 +764,25 @@ def test_sharp_edges_of_the_benchmarks_sculpted_plate_stay_sharp():
     layer = idealize.idealize(idealize.Mesh(m.V, m.F))
     assert layer.type_counts() == {"plane": 18, "cylinder": 1}
     assert correct_faces(layer.labels, m.gt, shapes.triangle_areas(m.V, m.F)) == 18
+
+
+@needs_freecad
+@pytest.mark.parametrize("seed", [1, 2])
+def test_narrow_fillet_round_a_boss_of_a_noisy_scan_is_a_torus(seed):
+    """A boss of r 8 on a plate, its foot rounded with r 0.5 (1.4 edges of the scan, 14 times its
+    noise): through the boss's axis the plate and the boss are lines meeting at a corner, and the
+    rounded corner fits the vertices there better than the sharp one: the fillet becomes a torus
+    about the boss's axis, holding its face."""
+    FreeCAD, Part, _ = shapes.freecad()
+    plate = Part.makeBox(40, 40, 10).fuse(Part.makeCylinder(8, 10, FreeCAD.Vector(20, 20, 10))).removeSplitter()
+    foot = [e for e in plate.Edges if type(e.Curve).__name__ == "Circle" and abs(e.Curve.Center.z - 10) < 1e-9]
+    solid = plate.makeFillet(0.5, foot)
+    V, F, gt, diag = shapes.uniform_remesh(solid)
+    V = shapes.normal_noise(V, F, diag, seed)
+    layer = idealize.idealize(idealize.Mesh(V, F))
+    areas = shapes.triangle_areas(V, F)
+    faces = dominant(layer, gt, areas)
+    tori = [f for face, f in zip(solid.Faces, faces) if type(face.Surface).__name__ == "Toroid"]
+    assert len(tori) == 1 and tori[0]["type"] == "torus", tori
+    assert abs(tori[0]["params"]["minor"] / 0.5 - 1) < 0.25 and abs(tori[0]["params"]["major"] / 8.5 - 1) < 0.02, tori
+    assert correct_faces(layer.labels, gt, areas) == len(solid.Faces)

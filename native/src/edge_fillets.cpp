@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <utility>
 
 namespace idealize {
@@ -16,20 +17,99 @@ using Vector2 = Eigen::Vector2d;
 // near the arc (half as many left the radius of one of the NIST parts' small fillets 15 % short).
 constexpr int kSamplePoints = 400;
 
-// The cross-section of two half-planes meeting at a line, in the plane perpendicular to it: the
-// first half-plane runs from the corner along +x, the second along `second`; `normal_a` and
-// `normal_b` are the unit normals of their lines pointing into the wedge between them.
+// The plane of the cross-section in which two features' surfaces are lines meeting at a corner:
+// across the line where two planes meet (`around_axis` false: a fillet is a cylinder along it), or
+// through the axis of a cylinder or cone and a plane across it (a fillet is a torus about it).
+struct Section {
+  bool around_axis = false;
+  Eigen::Vector3d origin, direction;  // a point of the planes' line and its direction; or of the axis
+  Eigen::Vector3d e1, e2;             // the section's axes across the line; or a frame across the axis
+
+  // Coordinates in the section: along e1 and e2; or distance from the axis and height along it.
+  Vector2 profile(const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d q = p - origin;
+    if (!around_axis) return {q.dot(e1), q.dot(e2)};
+    const double z = q.dot(direction);
+    return {(q - z * direction).norm(), z};
+  }
+  // Where along the edge: the length along the line, or the angle about the axis.
+  double position(const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d q = p - origin;
+    return around_axis ? std::atan2(q.dot(e2), q.dot(e1)) : q.dot(direction);
+  }
+};
+
+// A surface's line in the section: a point of it and a unit direction.
+struct ProfileLine {
+  Vector2 point, direction;
+};
+
+// The line of `s` in `section`: a plane through its line, or across its axis; a cylinder or cone
+// about the axis. None for anything else.
+std::optional<ProfileLine> profile_line(const Surface& s, const Section& section, double angle_tolerance) {
+  const double parallel = std::cos(angle_tolerance);
+  if (!section.around_axis) {
+    if (s.type != SurfaceType::Plane) return std::nullopt;
+    const Eigen::Vector3d in_plane = section.direction.cross(s.axis).normalized();
+    return ProfileLine{Vector2::Zero(), Vector2(in_plane.dot(section.e1), in_plane.dot(section.e2)).normalized()};
+  }
+  const double along = s.axis.dot(section.direction);
+  if (std::abs(along) < parallel) return std::nullopt;
+  switch (s.type) {
+    case SurfaceType::Plane:
+      return ProfileLine{Vector2(0.0, (s.point - section.origin).dot(section.direction)), Vector2(1.0, 0.0)};
+    case SurfaceType::Cylinder:
+      return ProfileLine{Vector2(s.radius, 0.0), Vector2(0.0, 1.0)};
+    case SurfaceType::Cone:  // from the apex, widening along the cone's axis
+      return ProfileLine{Vector2(0.0, (s.point - section.origin).dot(section.direction)),
+                         Vector2(std::sin(s.half_angle), along > 0.0 ? std::cos(s.half_angle) : -std::cos(s.half_angle))};
+    default:
+      return std::nullopt;
+  }
+}
+
+// The section of two adjacent features meeting at an angle, or none: two planes, or a plane across
+// the axis of a cylinder or cone (their axis; the plane's normal within the angle tolerance of it).
+std::optional<Section> section_between(const Surface& a, const Surface& b, double angle_tolerance) {
+  Section section;
+  if (a.type == SurfaceType::Plane && b.type == SurfaceType::Plane) {
+    const Eigen::Vector3d direction = a.axis.cross(b.axis);
+    if (direction.norm() < std::sin(angle_tolerance)) return std::nullopt;
+    section.direction = direction.normalized();
+    Eigen::Matrix3d rows;
+    rows << a.axis.transpose(), b.axis.transpose(), section.direction.transpose();
+    section.origin = rows.colPivHouseholderQr().solve(Eigen::Vector3d(a.axis.dot(a.point), b.axis.dot(b.point), 0.0));
+  } else if (a.type == SurfaceType::Plane || b.type == SurfaceType::Plane) {
+    const Surface& round = a.type == SurfaceType::Plane ? b : a;
+    if (round.type != SurfaceType::Cylinder && round.type != SurfaceType::Cone) return std::nullopt;
+    section.around_axis = true;
+    section.direction = round.axis;
+    section.origin = round.point;
+  } else {
+    return std::nullopt;
+  }
+  orthonormal_frame(section.direction, section.e1, section.e2);
+  return section;
+}
+
+// The wedge in the section: its corner, the first half-line along +x from it (`rotation` turns
+// section coordinates about the corner so), the second along `second`; `normal_a` and `normal_b` are
+// the unit normals of their lines pointing into the wedge between them.
 struct Wedge {
-  Eigen::Vector3d origin, along, x_axis, y_axis;
+  Section section;
+  Vector2 corner;
+  Eigen::Matrix2d rotation;
   Vector2 second, normal_a, normal_b;
-  double opening = 0.0;  // the angle between the half-planes (radians)
+  double opening = 0.0;  // the angle between the half-lines (radians)
   Eigen::Matrix2d inverse_normals;  // of the matrix whose rows are normal_a, normal_b
 
-  Vector2 section(const Eigen::Vector3d& p) const {
-    const Eigen::Vector3d q = p - origin;
-    return {q.dot(x_axis), q.dot(y_axis)};
+  Vector2 local(const Eigen::Vector3d& p) const { return rotation * (section.profile(p) - corner); }
+  // The point of space whose section coordinates (about the axis: at angle 0) are x.
+  Eigen::Vector3d point(const Vector2& x) const {
+    const Vector2 q = corner + rotation.transpose() * x;
+    if (!section.around_axis) return section.origin + q.x() * section.e1 + q.y() * section.e2;
+    return section.origin + q.x() * section.e1 + q.y() * section.direction;
   }
-  double position(const Eigen::Vector3d& p) const { return (p - origin).dot(along); }
 };
 
 // The wedge's lines moved by `offset` (along their inward normals) and joined by the arc of radius
@@ -92,16 +172,44 @@ double fit_offsets(const Wedge& w, const std::vector<Vector2>& points, double ra
 }
 
 struct Border {
-  std::vector<int> faces;  // faces of either plane along the border
+  std::vector<int> faces;  // faces of either feature along the border
   std::vector<int> edges;  // mesh edges between them
 };
 
+// Where along the edge a border runs: an interval of lengths along a line, or of angles about an
+// axis (circular).
+struct Extent {
+  double low = 0.0, span = 0.0;
+  bool circular = false;
+
+  bool contains(double position, double margin) const {
+    if (!circular) return position >= low - margin && position <= low + span + margin;
+    const double t = position - low - 2.0 * M_PI * std::floor((position - low) / (2.0 * M_PI));  // in [0, 2 pi)
+    return t <= span + margin || t >= 2.0 * M_PI - margin;
+  }
+};
+
+// The extent of `positions` (not empty); about an axis, the circle less its widest gap.
+Extent extent_of(std::vector<double> positions, bool circular) {
+  std::sort(positions.begin(), positions.end());
+  Extent extent{positions.front(), positions.back() - positions.front(), circular};
+  if (!circular) return extent;
+  double gap = positions.front() + 2.0 * M_PI - positions.back();
+  for (size_t i = 1; i < positions.size(); ++i)
+    if (positions[i] - positions[i - 1] > gap) {
+      gap = positions[i] - positions[i - 1];
+      extent.low = positions[i];
+    }
+  extent.span = 2.0 * M_PI - gap;
+  return extent;
+}
+
 // Faces of labels a and b reached from the border through faces of a and b whose centroid lies
-// within `reach` of the wedge's line, and along it within the border's extent widened by `reach`.
-// `seen` (#F, all 0) is left as it was.
+// within `reach` of the wedge's corner in the section, and along the edge within `margin` of the
+// border's extent. `seen` (#F, all 0) is left as it was.
 std::vector<int> faces_near(const MatrixX3d& centroids, const MeshTopology& topology, const std::vector<int>& labels,
-                            const Border& border, int a, int b, const Wedge& w, double low, double high, double reach,
-                            std::vector<char>& seen) {
+                            const Border& border, int a, int b, const Wedge& w, const Extent& extent, double reach,
+                            double margin, std::vector<char>& seen) {
   std::vector<int> found, reached;
   std::vector<int> stack;
   for (int f : border.faces)
@@ -112,8 +220,7 @@ std::vector<int> faces_near(const MatrixX3d& centroids, const MeshTopology& topo
     }
   auto near = [&](int f) {
     const Eigen::Vector3d c = centroids.row(f).transpose();
-    const double s = w.position(c);
-    return w.section(c).norm() <= reach && s >= low - reach && s <= high + reach;
+    return w.local(c).norm() <= reach && extent.contains(w.section.position(c), margin);
   };
   while (!stack.empty()) {
     const int f = stack.back();
@@ -175,9 +282,59 @@ double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology
   return lengths[lengths.size() / 2];
 }
 
+// The wedge fitted to `points` sharp and rounded: the least sums of squared residuals, the radius
+// (searched over log r between `smallest` and `largest`: a grid, then golden section around its
+// best) and the offsets of the rounded one. None when no rounding fits better than the sharp corner,
+// or the best is at the largest radius (no fillet of the band's size).
+struct Fillet {
+  double sharp = 0.0, rounded = 0.0, radius = 0.0;
+  Vector2 offset;
+};
+
+std::optional<Fillet> fit_fillet(const Wedge& w, const std::vector<Vector2>& points, double smallest, double largest) {
+  if (!(largest > smallest)) return std::nullopt;
+  Fillet best;
+  Vector2 sharp_offset = Vector2::Zero();
+  best.sharp = fit_offsets(w, points, 0.0, sharp_offset);
+  best.rounded = std::numeric_limits<double>::infinity();
+  Vector2 offset = sharp_offset;  // warm: from the previous radius
+  double best_log_r = 0.0;
+  auto rounded = [&](double log_r) {
+    const double value = fit_offsets(w, points, std::exp(log_r), offset);
+    if (value < best.rounded) best.rounded = value, best_log_r = log_r, best.offset = offset;
+    return value;
+  };
+  constexpr int kGrid = 12;
+  const double lo = std::log(smallest), hi = std::log(largest);
+  int arg = 0;
+  double least = std::numeric_limits<double>::infinity();
+  for (int i = 0; i <= kGrid; ++i) {
+    const double value = rounded(lo + (hi - lo) * i / kGrid);
+    if (value < least) least = value, arg = i;
+  }
+  if (!(least < best.sharp) || arg == kGrid) return std::nullopt;
+  double x0 = lo + (hi - lo) * std::max(arg - 1, 0) / kGrid, x1 = lo + (hi - lo) * (arg + 1) / kGrid;
+  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+  double u = x1 - golden * (x1 - x0), v = x0 + golden * (x1 - x0);
+  double fu = rounded(u), fv = rounded(v);
+  for (int i = 0; i < 12; ++i) {
+    if (fu < fv) {
+      x1 = v, v = u, fv = fu;
+      u = x1 - golden * (x1 - x0);
+      fu = rounded(u);
+    } else {
+      x0 = u, u = v, fu = fv;
+      v = x0 + golden * (x1 - x0);
+      fv = rounded(v);
+    }
+  }
+  best.radius = std::exp(best_log_r);
+  return best;
+}
+
 }  // namespace
 
-std::vector<char> round_plane_edges(const TriangleMesh& mesh, const MeshTopology& topology,
+std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topology,
                                     const EdgeFilletOptions& options, std::vector<Feature>& features,
                                     std::vector<int>& labels) {
   std::vector<char> changed(features.size(), 0);
@@ -187,56 +344,59 @@ std::vector<char> round_plane_edges(const TriangleMesh& mesh, const MeshTopology
   // Correlated residuals weigh as fewer independent ones: n (1 - rho) / (1 + rho).
   const double rho = neighbour_correlation(mesh, features, labels);
   const double independent = (1.0 - rho) / (1.0 + rho);
-  auto is_plane = [&](int l) { return l >= 0 && features[l].type == SurfaceType::Plane; };
+  auto is_edge_surface = [&](int l) {
+    if (l < 0) return false;
+    const SurfaceType t = features[l].type;
+    return t == SurfaceType::Plane || t == SurfaceType::Cylinder || t == SurfaceType::Cone;
+  };
   std::map<std::pair<int, int>, Border> borders;
-  std::vector<char> seen(mesh.num_faces(), 0), vertex_seen(mesh.num_vertices(), 0);
-  MatrixX3d centroids(mesh.num_faces(), 3);
-  for (int f = 0; f < mesh.num_faces(); ++f) centroids.row(f) = face_centroid(mesh, f).transpose();
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int c = 0; c < 3; ++c) {
       const int g = topology.face_neighbor(f, c);
-      if (g < f || labels[f] == labels[g] || !is_plane(labels[f]) || !is_plane(labels[g])) continue;
+      if (g < f || labels[f] == labels[g] || !is_edge_surface(labels[f]) || !is_edge_surface(labels[g])) continue;
       Border& border = borders[{std::min(labels[f], labels[g]), std::max(labels[f], labels[g])}];
       border.faces.push_back(f);
       border.faces.push_back(g);
       border.edges.push_back(topology.face_edge(f, c));
     }
+  std::vector<char> seen(mesh.num_faces(), 0), vertex_seen(mesh.num_vertices(), 0);
+  MatrixX3d centroids(mesh.num_faces(), 3);
+  for (int f = 0; f < mesh.num_faces(); ++f) centroids.row(f) = face_centroid(mesh, f).transpose();
 
   for (const auto& [pair, border] : borders) {
     const auto [a, b] = pair;
-    const Surface &pa = features[a].surface, &pb = features[b].surface;
+    const Surface &sa = features[a].surface, &sb = features[b].surface;
+    const std::optional<Section> section = section_between(sa, sb, options.angle_tolerance);
+    if (!section) continue;
+    const std::optional<ProfileLine> line_a = profile_line(sa, *section, options.angle_tolerance);
+    const std::optional<ProfileLine> line_b = profile_line(sb, *section, options.angle_tolerance);
+    if (!line_a || !line_b) continue;
+    auto cross = [](const Vector2& x, const Vector2& y) { return x.x() * y.y() - x.y() * y.x(); };
+    const double sine = cross(line_a->direction, line_b->direction);
+    if (std::abs(sine) < std::sin(options.angle_tolerance)) continue;  // parallel: no corner
     Wedge w;
-    const Eigen::Vector3d direction = pa.axis.cross(pb.axis);
-    if (direction.norm() < std::sin(options.angle_tolerance)) continue;
-    w.along = direction.normalized();
-    Eigen::Matrix3d rows;
-    rows << pa.axis.transpose(), pb.axis.transpose(), w.along.transpose();
-    w.origin = rows.colPivHouseholderQr().solve(Eigen::Vector3d(pa.axis.dot(pa.point), pb.axis.dot(pb.point), 0.0));
-    double low = std::numeric_limits<double>::infinity(), high = -low;
+    w.section = *section;
+    w.corner = line_a->point + cross(line_b->point - line_a->point, line_b->direction) / sine * line_a->direction;
+    w.rotation.setIdentity();
+    if (section->around_axis && !(w.corner.x() > edge)) continue;  // the corner circle must be a circle
+    // Along the edge, a margin of `reach` is a length on a line and an angle about the axis.
+    const double to_angle = section->around_axis ? 1.0 / w.corner.x() : 1.0;
+    std::vector<double> positions;
     for (int e : border.edges) {
       const auto& v = topology.edge_vertices(e);
-      const double s = w.position(0.5 * (mesh.V.row(v[0]) + mesh.V.row(v[1])).transpose());
-      low = std::min(low, s);
-      high = std::max(high, s);
+      positions.push_back(section->position(0.5 * (mesh.V.row(v[0]) + mesh.V.row(v[1])).transpose()));
     }
-    // Which way each half-plane runs from the line: towards its faces near the border.
-    w.x_axis = w.along.cross(pa.axis);
-    w.y_axis = w.along.cross(w.x_axis);
-    const std::vector<int> near = faces_near(centroids, topology, labels, border, a, b, w, low, high, band, seen);
-    Vector2 towards_a = Vector2::Zero();
-    Eigen::Vector3d in_b = w.along.cross(pb.axis);
-    double side_b = 0.0;
-    for (int f : near) {
-      const Eigen::Vector3d c = centroids.row(f).transpose();
-      if (labels[f] == a) towards_a += w.section(c);
-      else side_b += (c - w.origin).dot(in_b);
-    }
-    if (towards_a.x() < 0.0) {
-      w.x_axis = -w.x_axis;
-      w.y_axis = -w.y_axis;
-    }
-    if (side_b < 0.0) in_b = -in_b;
-    w.second = w.section(w.origin + in_b).normalized();
+    const Extent extent = extent_of(positions, section->around_axis);
+    const std::vector<int> near =
+        faces_near(centroids, topology, labels, border, a, b, w, extent, band, band * to_angle, seen);
+
+    // Each half-line runs from the corner towards its feature's faces near the border.
+    Vector2 towards_a = Vector2::Zero(), towards_b = Vector2::Zero();
+    for (int f : near) (labels[f] == a ? towards_a : towards_b) += w.local(centroids.row(f).transpose());
+    const Vector2 da = towards_a.dot(line_a->direction) >= 0.0 ? line_a->direction : Vector2(-line_a->direction);
+    const Vector2 db = towards_b.dot(line_b->direction) >= 0.0 ? line_b->direction : Vector2(-line_b->direction);
+    w.rotation << da.x(), da.y(), -da.y(), da.x();
+    w.second = w.rotation * db;
     w.opening = std::acos(std::clamp(w.second.x(), -1.0, 1.0));
     if (w.opening < options.angle_tolerance || w.opening > M_PI - options.angle_tolerance) continue;
     w.normal_a = Vector2(0.0, w.second.y() >= 0.0 ? 1.0 : -1.0);
@@ -246,96 +406,66 @@ std::vector<char> round_plane_edges(const TriangleMesh& mesh, const MeshTopology
     w.inverse_normals = normals.inverse();
 
     // The vertices of those faces within the band and the border's extent (an even subsample).
-    const std::vector<int> vertices = distinct_vertices(mesh, near, vertex_seen);
-    std::vector<Vector2> section;
-    for (int v : vertices) {
+    std::vector<Vector2> local;
+    for (int v : distinct_vertices(mesh, near, vertex_seen)) {
       const Eigen::Vector3d p = mesh.V.row(v).transpose();
-      const double s = w.position(p);
-      if (s >= low && s <= high && w.section(p).norm() <= band) section.push_back(w.section(p));
+      const Vector2 x = w.local(p);
+      if (x.norm() <= band && extent.contains(section->position(p), 0.0)) local.push_back(x);
     }
-    const int count = static_cast<int>(section.size());
+    const int count = static_cast<int>(local.size());
     if (count <= 2 * parameter_count(SurfaceType::Cylinder)) continue;
     const int step = std::max(1, count / kSamplePoints);
     std::vector<Vector2> sample;
-    for (int i = 0; i < count; i += step) sample.push_back(section[i]);
+    for (int i = 0; i < count; i += step) sample.push_back(local[i]);
     const int n = static_cast<int>(sample.size());
 
-    // The sharp wedge, then the rounded one over log r: a grid, then golden section around its best.
-    Vector2 sharp_offset = Vector2::Zero();
-    const double sharp = fit_offsets(w, sample, 0.0, sharp_offset);
-    const double tangent_per_radius = 1.0 / std::tan(0.5 * w.opening);  // tangent line's distance from the corner
-    const double largest = 0.5 * band / tangent_per_radius, smallest = edge / 8.0;
-    if (!(largest > smallest)) continue;
-    Vector2 offset = sharp_offset;  // warm: from the previous radius
-    double fillet = std::numeric_limits<double>::infinity(), best_log_r = 0.0;
-    Vector2 best_offset = offset;
-    auto rounded = [&](double log_r) {
-      const double value = fit_offsets(w, sample, std::exp(log_r), offset);
-      if (value < fillet) fillet = value, best_log_r = log_r, best_offset = offset;
-      return value;
-    };
-    constexpr int kGrid = 12;
-    const double lo = std::log(smallest), hi = std::log(largest);
-    int arg = 0;
-    double least = std::numeric_limits<double>::infinity();
-    for (int i = 0; i <= kGrid; ++i) {
-      const double value = rounded(lo + (hi - lo) * i / kGrid);
-      if (value < least) least = value, arg = i;
-    }
-    // No rounding fits better than the sharp edge; or still better at the band's limit: no fillet
-    // of the band's size.
-    if (!(least < sharp) || arg == kGrid) continue;
-    double x0 = lo + (hi - lo) * std::max(arg - 1, 0) / kGrid, x1 = lo + (hi - lo) * (arg + 1) / kGrid;
-    const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
-    double u = x1 - golden * (x1 - x0), v = x0 + golden * (x1 - x0);
-    double fu = rounded(u), fv = rounded(v);
-    for (int i = 0; i < 12; ++i) {
-      if (fu < fv) {
-        x1 = v, v = u, fv = fu;
-        u = x1 - golden * (x1 - x0);
-        fu = rounded(u);
-      } else {
-        x0 = u, u = v, fu = fv;
-        v = x0 + golden * (x1 - x0);
-        fv = rounded(v);
-      }
-    }
-    const double radius = std::exp(best_log_r);
-    const double variance = fillet / std::max(n - 3, 1);
-    const double plane_spread = std::max(features[a].spread, features[b].spread);
-    // BIC for one more parameter, over the independent residuals; the band explained as the planes
-    // explain their patches; an arc longer than a sharp edge's (the planes turn by pi minus the opening).
+    const std::optional<Fillet> fillet = fit_fillet(w, sample, edge / 8.0, 0.5 * band * std::tan(0.5 * w.opening));
+    if (!fillet) continue;
+    const double variance = fillet->rounded / std::max(n - 3, 1);
+    const double spread = std::max(features[a].spread, features[b].spread);
+    // BIC for one more parameter, over the independent residuals; the band explained as the
+    // features explain their patches; an arc longer than a sharp edge's (the features turn by pi
+    // less the opening).
     const double effective = std::max(independent * n, 2.0);
-    if (!(independent * (sharp - fillet) > std::log(effective) * variance) ||
-        std::sqrt(variance) > options.residual_ratio * plane_spread || radius * (M_PI - w.opening) < options.shortest_arc * edge)
+    if (!(independent * (fillet->sharp - fillet->rounded) > std::log(effective) * variance) ||
+        std::sqrt(variance) > options.residual_ratio * spread ||
+        fillet->radius * (M_PI - w.opening) < options.shortest_arc * edge)
       continue;
 
     // The faces whose centroid lies between the radii to the tangent lines.
-    const Rounding g = round_wedge(w, best_offset, radius);
-    auto cross = [](const Vector2& x, const Vector2& y) { return x.x() * y.y() - x.y() * y.x(); };
+    const Rounding g = round_wedge(w, fillet->offset, fillet->radius);
     const Vector2 to_a = g.touch_a - g.centre, to_b = g.touch_b - g.centre;
     std::vector<int> arc;
     for (int f : near) {
       if (labels[f] != a && labels[f] != b) continue;
       const Eigen::Vector3d c = centroids.row(f).transpose();
-      const double s = w.position(c);
-      const Vector2 v = w.section(c) - g.centre;
-      if (s < low - edge || s > high + edge || v.dot(to_a + to_b) <= 0.0) continue;
+      const Vector2 v = w.local(c) - g.centre;
+      if (!extent.contains(section->position(c), edge * to_angle) || v.dot(to_a + to_b) <= 0.0) continue;
       if (cross(to_a, v) * cross(to_a, to_b) < 0.0 || cross(to_b, v) * cross(to_b, to_a) < 0.0) continue;
       arc.push_back(f);
     }
     if (static_cast<int>(distinct_vertices(mesh, arc, vertex_seen).size()) <= 2 * parameter_count(SurfaceType::Cylinder))
       continue;
 
-    Feature fillet_feature;
-    fillet_feature.id = static_cast<int>(features.size());
-    fillet_feature.type = fillet_feature.curvature_type = SurfaceType::Cylinder;
-    fillet_feature.surface.type = SurfaceType::Cylinder;
-    fillet_feature.surface.axis = w.along;
-    fillet_feature.surface.point = w.origin + g.centre.x() * w.x_axis + g.centre.y() * w.y_axis;
-    fillet_feature.surface.radius = radius;
-    for (int f : arc) labels[f] = fillet_feature.id;
-    features.push_back(fillet_feature);
+    Feature rounding;
+    rounding.id = static_cast<int>(features.size());
+    Surface& surface = rounding.surface;
+    surface.axis = section->direction;
+    surface.radius = fillet->radius;
+    if (!section->around_axis) {
+      surface.type = SurfaceType::Cylinder;
+      surface.point = w.point(g.centre);
+    } else {  // about the axis: a torus whose tube is the arc
+      const Vector2 centre = w.corner + w.rotation.transpose() * g.centre;
+      if (!(centre.x() > fillet->radius)) continue;
+      surface.type = SurfaceType::Torus;
+      surface.point = section->origin + centre.y() * section->direction;
+      surface.radius = centre.x();
+      surface.minor = fillet->radius;
+    }
+    rounding.type = rounding.curvature_type = surface.type;
+    for (int f : arc) labels[f] = rounding.id;
+    features.push_back(rounding);
     changed.resize(features.size(), 0);
     changed[a] = changed[b] = changed.back() = 1;
   }

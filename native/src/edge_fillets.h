@@ -1,17 +1,20 @@
-// Narrow fillets that segmentation gave to the planes beside them.
+// Narrow fillets that segmentation gave to the features beside them.
 //
 // A rounded edge a facet or two wide sags across the edge by a few times a scan's noise: no
-// curvature histogram sees a patch there, and the two planes take half of it each (on the NIST
-// test parts, most fillets of radius 0.8-1.5 edge lengths). Where two planes meet, the vertices near
-// their line of intersection fit either the sharp wedge or the wedge rounded by the cylinder tangent
-// to both planes, which adds one parameter, its radius (J. S.-S. Chen, "Hybrid CAD modeler", 4.3:
-// a fillet is defined by the two surfaces it is tangent to and its radius). The rounding is kept
+// curvature histogram sees a patch there, and the two features take half of it each (on the NIST
+// test parts, most fillets of radius 0.8-1.5 edge lengths). Where two planes meet, or a plane meets
+// a cylinder or cone across its axis, the two surfaces are lines in a cross-section (across the
+// planes' line; through the axis). There the vertices near the edge fit either the sharp wedge or
+// the wedge rounded by the circle tangent to both lines, which adds one parameter, its radius (J.
+// S.-S. Chen, "Hybrid CAD modeler", 4.3: a fillet is defined by the surfaces it is tangent to and its
+// radius): a cylinder along the planes' line, or a torus about the axis. The rounding is kept
 // where the Bayesian information criterion prefers it (counting correlated residuals, a sculpted
 // part's, as fewer independent ones), the band fits it about as well as the planes fit their own
 // patches, and its arc is longer than a mesh edge (a rounding that narrow is what uniform
 // re-tessellation, or displacement along averaged vertex normals, makes of a sharp edge);
-// the faces between its tangent lines become a cylinder feature. At this resolution a chamfer of the
-// same width fits the rounded wedge as well (no fit tells them apart): it becomes a cylinder too.
+// the faces between its tangent lines become a cylinder or torus feature. At this resolution a
+// chamfer of the same width fits the rounded wedge as well (no fit tells them apart): it becomes a
+// fillet too.
 #pragma once
 
 #include "feature_layer.h"
@@ -21,7 +24,8 @@
 namespace idealize {
 
 struct EdgeFilletOptions {
-  // Planes closer than this to parallel (radians) have no edge between them.
+  // Surfaces closer than this to parallel in the section (radians) have no edge between them; a
+  // plane's normal within it of an axis is across it.
   double angle_tolerance = 5.0 * 3.14159265358979323846 / 180.0;
   // The band fitted on each side of the edge, in median edge lengths: fillets whose tangent lines
   // lie within half of it are found (larger ones are patches of their own).
@@ -36,12 +40,12 @@ struct EdgeFilletOptions {
   double shortest_arc = 1.15;
 };
 
-// Finds the rounded edges between adjacent plane features of a noisy mesh and appends a cylinder
-// feature for each (type, surface; its residuals are left to the caller), relabelling the faces
-// between its tangent lines. labels (#F): feature id per face (-1: none); features: indexed by id,
-// with their spreads. Returns, per feature after the call, whether it changed (a new fillet, or a
-// plane that gave it faces).
-std::vector<char> round_plane_edges(const TriangleMesh& mesh, const MeshTopology& topology,
+// Finds the rounded edges between adjacent features of a noisy mesh (two planes; a plane and a
+// cylinder or cone across its axis) and appends a cylinder or torus feature for each (type, surface;
+// its residuals are left to the caller), relabelling the faces between its tangent lines. labels
+// (#F): feature id per face (-1: none); features: indexed by id, with their spreads. Returns, per
+// feature after the call, whether it changed (a new fillet, or a feature that gave it faces).
+std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topology,
                                     const EdgeFilletOptions& options, std::vector<Feature>& features,
                                     std::vector<int>& labels);
 

@@ -1318,19 +1318,20 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     std::vector<std::pair<int, int>> adjacent;  // the pairs of features that share a mesh edge
     for (const auto& [pair, turn] : boundary_turns(mesh, topology, layer.labels)) adjacent.push_back(pair);
     fillets_between_planes(feature_points, adjacent, shared, layer.features);
-    // Fillets too narrow for a patch of their own, which the planes beside them took: the new
-    // cylinders keep the surface the edge's band fixed, the planes are refitted without them.
+    // Fillets too narrow for a patch of their own, which the features beside them took: the new
+    // cylinders and tori keep the surface the edge's band fixed, the others are refitted without them.
     EdgeFilletOptions edges;
     edges.angle_tolerance = shared.angle_tolerance;
     edges.residual_ratio = options.residual_ratio;
-    const std::vector<char> rounded = round_plane_edges(mesh, topology, edges, layer.features, layer.labels);
+    const size_t existing = layer.features.size();
+    const std::vector<char> rounded = round_edges(mesh, topology, edges, layer.features, layer.labels);
     if (std::find(rounded.begin(), rounded.end(), 1) != rounded.end()) {
       const std::vector<PatchPoints> now = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
       for (size_t p = 0; p < layer.features.size(); ++p) {
         if (!rounded[p]) continue;
         Feature& f = layer.features[p];
         SurfaceFit fit;
-        if (f.type == SurfaceType::Plane) fit = fit_surface(SurfaceType::Plane, now[p], options.fit, &f.surface);
+        if (p < existing) fit = fit_surface(f.type, now[p], options.fit, &f.surface);
         if (!fit.valid) {
           fit.surface = f.surface;
           fit.valid = true;
