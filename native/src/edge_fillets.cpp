@@ -254,11 +254,12 @@ std::vector<int> distinct_vertices(const TriangleMesh& mesh, const std::vector<i
   return vertices;
 }
 
-// The correlation of the plane features' residuals at the ends of their mesh edges: about 0 for a
-// scan's independent noise, near 1 for a sculpted part's smooth undulation, whose residuals are not
-// independent evidence (measured on the benchmark: 0.02-0.27 on the scans, 0.74-0.87 sculpted).
-double neighbour_correlation(const TriangleMesh& mesh, const std::vector<Feature>& features,
-                             const std::vector<int>& labels) {
+// The share of a mesh's residuals that counts as independent evidence, (1 - rho) / (1 + rho), rho
+// being the correlation of the plane features' residuals at the ends of their mesh edges: about 0
+// for a scan's independent noise, near 1 for a sculpted part's smooth undulation (measured on the
+// benchmark: 0.02-0.27 on the scans, 0.74-0.87 sculpted).
+double independent_share(const TriangleMesh& mesh, const std::vector<Feature>& features,
+                         const std::vector<int>& labels) {
   double product = 0.0, square = 0.0;
   for (int f = 0; f < mesh.num_faces(); ++f) {
     if (labels[f] < 0 || features[labels[f]].type != SurfaceType::Plane) continue;
@@ -268,7 +269,16 @@ double neighbour_correlation(const TriangleMesh& mesh, const std::vector<Feature
     product += r[0] * r[1] + r[1] * r[2] + r[2] * r[0];
     square += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
   }
-  return square > 0.0 ? std::clamp(product / square, 0.0, 1.0) : 0.0;
+  const double rho = square > 0.0 ? std::clamp(product / square, 0.0, 1.0) : 0.0;
+  return (1.0 - rho) / (1.0 + rho);
+}
+
+// An even subsample of at most kSamplePoints of `points`.
+std::vector<Vector2> even_sample(const std::vector<Vector2>& points) {
+  const size_t step = std::max<size_t>(1, points.size() / kSamplePoints);
+  std::vector<Vector2> sample;
+  for (size_t i = 0; i < points.size(); i += step) sample.push_back(points[i]);
+  return sample;
 }
 
 double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology) {
@@ -288,7 +298,7 @@ double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology
 // or the best is at the largest radius (no fillet of the band's size).
 struct Fillet {
   double sharp = 0.0, rounded = 0.0, radius = 0.0;
-  Vector2 offset;
+  Vector2 offset = Vector2::Zero();
 };
 
 std::optional<Fillet> fit_fillet(const Wedge& w, const std::vector<Vector2>& points, double smallest, double largest) {
@@ -332,18 +342,62 @@ std::optional<Fillet> fit_fillet(const Wedge& w, const std::vector<Vector2>& poi
   return best;
 }
 
+// A circle of the section continued, past the point where its outward normal is `normal`, by its
+// tangent line running along `along` (perpendicular to it): points past that point along `along`
+// lie on the line, the others on the circle. `circle`: centre (2) and radius.
+struct Continuation {
+  Vector2 normal = Vector2::UnitX(), along = Vector2::UnitY();
+};
+
+double continuation_residual(const Eigen::Vector3d& circle, const Continuation* continuation, const Vector2& x) {
+  const Vector2 centre = circle.head<2>();
+  if (continuation) {
+    const Vector2 touch = centre + circle.z() * continuation->normal;
+    if ((x - touch).dot(continuation->along) > 0.0) return (x - touch).dot(continuation->normal);
+  }
+  return (x - centre).norm() - circle.z();
+}
+
+// The least sum of squared residuals of `points` over the circle (Gauss-Newton from `circle`,
+// which returns the best), continued or not.
+double fit_continuation(const std::vector<Vector2>& points, const Continuation* continuation, Eigen::Vector3d& circle) {
+  auto sum_of_squares = [&](const Eigen::Vector3d& c) {
+    double sum = 0.0;
+    for (const Vector2& x : points) sum += std::pow(continuation_residual(c, continuation, x), 2);
+    return sum;
+  };
+  double best = sum_of_squares(circle);
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    const double step = 1e-6 * std::max(std::abs(circle.z()), circle.head<2>().norm());
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    for (const Vector2& x : points) {
+      const double r = continuation_residual(circle, continuation, x);
+      Eigen::Vector3d gradient;
+      for (int k = 0; k < 3; ++k)
+        gradient[k] = (continuation_residual(circle + step * Eigen::Vector3d::Unit(k), continuation, x) - r) / step;
+      normal += gradient * gradient.transpose();
+      rhs -= gradient * r;
+    }
+    normal.diagonal().array() += 1e-12 * (normal.trace() + 1.0);
+    const Eigen::Vector3d next = circle + normal.ldlt().solve(rhs);
+    const double value = sum_of_squares(next);
+    if (!(value < best)) break;
+    best = value;
+    circle = next;
+  }
+  return best;
+}
+
 }  // namespace
 
-std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topology,
-                                    const EdgeFilletOptions& options, std::vector<Feature>& features,
-                                    std::vector<int>& labels) {
+std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topology, const EdgeFilletOptions& options,
+                              std::vector<Feature>& features, std::vector<int>& labels) {
   std::vector<char> changed(features.size(), 0);
   const double edge = median_edge_length(mesh, topology);
   if (!(edge > 0.0)) return changed;
   const double band = options.band_edges * edge;
-  // Correlated residuals weigh as fewer independent ones: n (1 - rho) / (1 + rho).
-  const double rho = neighbour_correlation(mesh, features, labels);
-  const double independent = (1.0 - rho) / (1.0 + rho);
+  const double independent = independent_share(mesh, features, labels);
   auto is_edge_surface = [&](int l) {
     if (l < 0) return false;
     const SurfaceType t = features[l].type;
@@ -412,11 +466,8 @@ std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topo
       const Vector2 x = w.local(p);
       if (x.norm() <= band && extent.contains(section->position(p), 0.0)) local.push_back(x);
     }
-    const int count = static_cast<int>(local.size());
-    if (count <= 2 * parameter_count(SurfaceType::Cylinder)) continue;
-    const int step = std::max(1, count / kSamplePoints);
-    std::vector<Vector2> sample;
-    for (int i = 0; i < count; i += step) sample.push_back(local[i]);
+    if (static_cast<int>(local.size()) <= 2 * parameter_count(SurfaceType::Cylinder)) continue;
+    const std::vector<Vector2> sample = even_sample(local);
     const int n = static_cast<int>(sample.size());
 
     const std::optional<Fillet> fillet = fit_fillet(w, sample, edge / 8.0, 0.5 * band * std::tan(0.5 * w.opening));
@@ -468,6 +519,89 @@ std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topo
     features.push_back(rounding);
     changed.resize(features.size(), 0);
     changed[a] = changed[b] = changed.back() = 1;
+  }
+  return changed;
+}
+
+std::vector<char> split_tangent_continuations(const TriangleMesh& mesh, const MeshTopology& topology,
+                                              const EdgeFilletOptions& options, std::vector<Feature>& features,
+                                              std::vector<int>& labels) {
+  std::vector<char> changed(features.size(), 0);
+  const double edge = median_edge_length(mesh, topology);
+  if (!(edge > 0.0)) return changed;
+  const double independent = independent_share(mesh, features, labels);
+  std::vector<std::vector<int>> faces_of(features.size());
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (labels[f] >= 0 && features[labels[f]].type == SurfaceType::Torus) faces_of[labels[f]].push_back(f);
+  std::vector<char> vertex_seen(mesh.num_vertices(), 0);
+  const size_t existing = features.size();
+  for (size_t t = 0; t < existing; ++t) {
+    if (features[t].type != SurfaceType::Torus) continue;
+    const Surface torus = features[t].surface;
+    Section section;
+    section.around_axis = true;
+    section.origin = torus.point;
+    section.direction = torus.axis;
+    orthonormal_frame(section.direction, section.e1, section.e2);
+    std::vector<Vector2> profile;
+    for (int v : distinct_vertices(mesh, faces_of[t], vertex_seen)) profile.push_back(section.profile(mesh.V.row(v).transpose()));
+    if (static_cast<int>(profile.size()) <= 2 * parameter_count(SurfaceType::Torus)) continue;
+    const std::vector<Vector2> sample = even_sample(profile);
+    const int n = static_cast<int>(sample.size());
+
+    // The tube's circle alone, and continued by a line along the axis or across it at one of its
+    // four tangent points, each way: as many parameters, and the better one is kept where it fits
+    // better by more than one more parameter would (the choice among the eight).
+    Eigen::Vector3d circle(torus.radius, 0.0, torus.minor);
+    const double alone = fit_continuation(sample, nullptr, circle);
+    double best = std::numeric_limits<double>::infinity();
+    Continuation chosen;
+    Eigen::Vector3d continued = circle;
+    for (const Vector2& normal : {Vector2(1, 0), Vector2(-1, 0), Vector2(0, 1), Vector2(0, -1)})
+      for (double sign : {1.0, -1.0}) {
+        const Continuation c{normal, sign * Vector2(-normal.y(), normal.x())};
+        Eigen::Vector3d fitted = circle;
+        const double value = fit_continuation(sample, &c, fitted);
+        if (value < best) best = value, chosen = c, continued = fitted;
+      }
+    const double variance = best / std::max(n - 3, 1);
+    if (!(independent * (alone - best) > std::log(std::max(independent * n, 2.0)) * variance)) continue;
+    const Vector2 centre = continued.head<2>(), touch = centre + continued.z() * chosen.normal;
+    if (!(centre.x() > continued.z() && continued.z() > 0.0)) continue;  // a ring torus still
+
+    // The faces past the tangent point go to the line's surface: a cylinder along the axis, or a
+    // plane across it.
+    std::vector<int> past, kept;
+    for (int f : faces_of[t])
+      ((section.profile(face_centroid(mesh, f)) - touch).dot(chosen.along) > 0.0 ? past : kept).push_back(f);
+    // Both parts must be features, and the line longer than a sharp edge's rounding.
+    double length = 0.0;
+    for (int f : past) length = std::max(length, (section.profile(face_centroid(mesh, f)) - touch).dot(chosen.along));
+    if (static_cast<int>(distinct_vertices(mesh, past, vertex_seen).size()) <= 2 * parameter_count(SurfaceType::Cylinder) ||
+        static_cast<int>(distinct_vertices(mesh, kept, vertex_seen).size()) <= 2 * parameter_count(SurfaceType::Torus) ||
+        length < options.shortest_arc * edge)
+      continue;
+    Feature line;
+    line.id = static_cast<int>(features.size());
+    if (std::abs(chosen.along.y()) > 0.5) {  // along the axis
+      if (!(touch.x() > 0.0)) continue;
+      line.surface.type = SurfaceType::Cylinder;
+      line.surface.point = torus.point;
+      line.surface.radius = touch.x();
+    } else {
+      line.surface.type = SurfaceType::Plane;
+      line.surface.point = torus.point + touch.y() * torus.axis;
+    }
+    line.surface.axis = torus.axis;
+    line.type = line.curvature_type = line.surface.type;
+    Surface& ring = features[t].surface;
+    ring.point = torus.point + centre.y() * torus.axis;
+    ring.radius = centre.x();
+    ring.minor = continued.z();
+    for (int f : past) labels[f] = line.id;
+    features.push_back(line);
+    changed.resize(features.size(), 0);
+    changed[t] = changed.back() = 1;
   }
   return changed;
 }

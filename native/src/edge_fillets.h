@@ -49,4 +49,16 @@ std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topo
                                     const EdgeFilletOptions& options, std::vector<Feature>& features,
                                     std::vector<int>& labels);
 
+// A torus feature that also holds the cylinder or plane it runs into tangentially (segmentation
+// smoothed their curvatures together over a narrow band; a free torus bends to fit both within the
+// noise): through the axis, the profile of its vertices is a circle continued by its tangent line.
+// That fit has as many parameters as the circle alone (the choice of the tangent point among four
+// and of the side is counted as one more in the BIC, over the independent residuals); where it is
+// preferred, the faces past the tangent point become the cylinder (line along the axis) or plane
+// (across it), and the torus takes the continued fit's circle. Returns, per feature after the call,
+// whether it changed.
+std::vector<char> split_tangent_continuations(const TriangleMesh& mesh, const MeshTopology& topology,
+                                              const EdgeFilletOptions& options, std::vector<Feature>& features,
+                                              std::vector<int>& labels);
+
 }  // namespace idealize

@@ -1318,17 +1318,19 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     std::vector<std::pair<int, int>> adjacent;  // the pairs of features that share a mesh edge
     for (const auto& [pair, turn] : boundary_turns(mesh, topology, layer.labels)) adjacent.push_back(pair);
     fillets_between_planes(feature_points, adjacent, shared, layer.features);
-    // Fillets too narrow for a patch of their own, which the features beside them took: the new
-    // cylinders and tori keep the surface the edge's band fixed, the others are refitted without them.
+    // Fillets too narrow for a patch of their own, which the features beside them took; cylinders and
+    // planes that a torus took with it. The new features keep the surface the fit of the edge's
+    // band or the torus's profile fixed, the others are refitted without the faces they gave.
     EdgeFilletOptions edges;
     edges.angle_tolerance = shared.angle_tolerance;
     edges.residual_ratio = options.residual_ratio;
-    const size_t existing = layer.features.size();
-    const std::vector<char> rounded = round_edges(mesh, topology, edges, layer.features, layer.labels);
-    if (std::find(rounded.begin(), rounded.end(), 1) != rounded.end()) {
+    for (auto find : {round_edges, split_tangent_continuations}) {
+      const size_t existing = layer.features.size();
+      const std::vector<char> changed = find(mesh, topology, edges, layer.features, layer.labels);
+      if (std::find(changed.begin(), changed.end(), 1) == changed.end()) continue;
       const std::vector<PatchPoints> now = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
       for (size_t p = 0; p < layer.features.size(); ++p) {
-        if (!rounded[p]) continue;
+        if (!changed[p]) continue;
         Feature& f = layer.features[p];
         SurfaceFit fit;
         if (p < existing) fit = fit_surface(f.type, now[p], options.fit, &f.surface);
