@@ -103,14 +103,23 @@ struct Wedge {
   double opening = 0.0;  // the angle between the half-lines (radians)
   Eigen::Matrix2d inverse_normals;  // of the matrix whose rows are normal_a, normal_b
 
+  // Wedge coordinates of p, and the section coordinates of wedge coordinates x.
   Vector2 local(const Eigen::Vector3d& p) const { return rotation * (section.profile(p) - corner); }
-  // The point of space whose section coordinates (about the axis: at angle 0) are x.
-  Eigen::Vector3d point(const Vector2& x) const {
-    const Vector2 q = corner + rotation.transpose() * x;
-    if (!section.around_axis) return section.origin + q.x() * section.e1 + q.y() * section.e2;
-    return section.origin + q.x() * section.e1 + q.y() * section.direction;
-  }
+  Vector2 profile(const Vector2& x) const { return corner + rotation.transpose() * x; }
 };
+
+// Turns the wedge so that its first half-line (direction `first` in the section) runs along +x,
+// the second (`second`) where it then lies.
+void orient(Wedge& w, const Vector2& first, const Vector2& second) {
+  w.rotation << first.x(), first.y(), -first.y(), first.x();
+  w.second = w.rotation * second;
+  w.opening = std::acos(std::clamp(w.second.x(), -1.0, 1.0));
+  w.normal_a = Vector2(0.0, w.second.y() >= 0.0 ? 1.0 : -1.0);
+  w.normal_b = Vector2(std::abs(w.second.y()), w.second.y() >= 0.0 ? -w.second.x() : w.second.x());
+  Eigen::Matrix2d normals;
+  normals << w.normal_a.transpose(), w.normal_b.transpose();
+  w.inverse_normals = normals.inverse();
+}
 
 // The wedge's lines moved by `offset` (along their inward normals) and joined by the arc of radius
 // r tangent to both (r = 0: the sharp corner).
@@ -449,15 +458,8 @@ std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topo
     for (int f : near) (labels[f] == a ? towards_a : towards_b) += w.local(centroids.row(f).transpose());
     const Vector2 da = towards_a.dot(line_a->direction) >= 0.0 ? line_a->direction : Vector2(-line_a->direction);
     const Vector2 db = towards_b.dot(line_b->direction) >= 0.0 ? line_b->direction : Vector2(-line_b->direction);
-    w.rotation << da.x(), da.y(), -da.y(), da.x();
-    w.second = w.rotation * db;
-    w.opening = std::acos(std::clamp(w.second.x(), -1.0, 1.0));
+    orient(w, da, db);
     if (w.opening < options.angle_tolerance || w.opening > M_PI - options.angle_tolerance) continue;
-    w.normal_a = Vector2(0.0, w.second.y() >= 0.0 ? 1.0 : -1.0);
-    w.normal_b = Vector2(std::abs(w.second.y()), w.second.y() >= 0.0 ? -w.second.x() : w.second.x());
-    Eigen::Matrix2d normals;
-    normals << w.normal_a.transpose(), w.normal_b.transpose();
-    w.inverse_normals = normals.inverse();
 
     // The vertices of those faces within the band and the border's extent (an even subsample).
     std::vector<Vector2> local;
@@ -503,11 +505,11 @@ std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topo
     Surface& surface = rounding.surface;
     surface.axis = section->direction;
     surface.radius = fillet->radius;
+    const Vector2 centre = w.profile(g.centre);
     if (!section->around_axis) {
       surface.type = SurfaceType::Cylinder;
-      surface.point = w.point(g.centre);
+      surface.point = section->origin + centre.x() * section->e1 + centre.y() * section->e2;
     } else {  // about the axis: a torus whose tube is the arc
-      const Vector2 centre = w.corner + w.rotation.transpose() * g.centre;
       if (!(centre.x() > fillet->radius)) continue;
       surface.type = SurfaceType::Torus;
       surface.point = section->origin + centre.y() * section->direction;
