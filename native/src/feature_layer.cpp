@@ -14,6 +14,7 @@
 #include <array>
 #include <chrono>
 #include <functional>
+#include <future>
 #include <limits>
 #include <map>
 #include <set>
@@ -1063,13 +1064,25 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   auto identify_points = [&](const PatchPoints& pp, const PatchCurvature& c) {
     return identify(pp, c, zero_mean_curvature, options, layer.distance_tolerance);
   };
+  // On two threads (this runs on machines of two cores or more), the largest patches first and
+  // dealt out in turn; each patch's fit is its own, so the result does not depend on the threads.
   auto identify_all = [&](const std::vector<PatchPoints>& points, const std::vector<char>& which,
                           const ProgressSpan& span) {
     layer.features.resize(points.size());
-    for (size_t p = 0; p < points.size(); ++p) {
-      span.step(static_cast<double>(p) / points.size());
-      if (which[p]) layer.features[p] = identify_points(points[p], curvature[p]);
-    }
+    std::vector<int> order;
+    for (size_t p = 0; p < points.size(); ++p)
+      if (which[p]) order.push_back(static_cast<int>(p));
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int x, int y) { return points[x].points.rows() > points[y].points.rows(); });
+    auto identify_every_other = [&](size_t first) {
+      for (size_t i = first; i < order.size(); i += 2) {
+        if (first == 0) span.step(static_cast<double>(i) / order.size());  // reports and cancels
+        layer.features[order[i]] = identify_points(points[order[i]], curvature[order[i]]);
+      }
+    };
+    std::future<void> second = std::async(std::launch::async, identify_every_other, 1);
+    identify_every_other(0);  // should it throw (cancelled), leaving waits for the other thread
+    second.get();
   };
   std::vector<PatchPoints> points = patch_points(mesh, layer.labels, num_patches);
   identify_all(points, std::vector<char>(num_patches, 1), progress.sub(0.01, 0.06));
