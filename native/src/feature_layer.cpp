@@ -15,6 +15,7 @@
 #include <chrono>
 #include <functional>
 #include <future>
+#include <system_error>
 #include <limits>
 #include <map>
 #include <set>
@@ -1080,7 +1081,12 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         layer.features[order[i]] = identify_points(points[order[i]], curvature[order[i]]);
       }
     };
-    std::future<void> second = std::async(std::launch::async, identify_every_other, 1);
+    std::future<void> second;
+    try {
+      second = std::async(std::launch::async, identify_every_other, 1);
+    } catch (const std::system_error&) {  // no thread to be had: all on this one
+      second = std::async(std::launch::deferred, identify_every_other, 1);
+    }
     identify_every_other(0);  // should it throw (cancelled), leaving waits for the other thread
     second.get();
   };
