@@ -182,15 +182,11 @@ def shared_part(name):
     return max(Part.read(str(SHARED_STEP / name)).Solids, key=lambda s: s.Volume)
 
 
-def bench_module(name):
-    """A module of the benchmark (bench/), which makes the variants of the parts."""
-    bench = str(Path(__file__).resolve().parents[1] / "bench")
-    if bench not in sys.path:
-        sys.path.insert(0, bench)
-    return __import__(name)
-
-
 def benchmark_mesh(name, variant):
     """The benchmark's `variant` ("cad", "scan" or "sculpt") of the STEP part `name`, made (and
     cached) by bench/datasets.py: a mesh with V, F, gt (B-rep face per triangle) and face_types."""
-    return bench_module("datasets").load_part(SHARED_STEP / name, [variant], log=lambda *_: None)[0]
+    bench = str(Path(__file__).resolve().parents[1] / "bench")
+    if bench not in sys.path:
+        sys.path.insert(0, bench)
+    import datasets
+    return datasets.load_part(SHARED_STEP / name, [variant], log=lambda *_: None)[0]

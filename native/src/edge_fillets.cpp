@@ -290,17 +290,6 @@ std::vector<Vector2> even_sample(const std::vector<Vector2>& points) {
   return sample;
 }
 
-double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology) {
-  std::vector<double> lengths(topology.num_edges());
-  for (int e = 0; e < topology.num_edges(); ++e) {
-    const auto& v = topology.edge_vertices(e);
-    lengths[e] = (mesh.V.row(v[0]) - mesh.V.row(v[1])).norm();
-  }
-  if (lengths.empty()) return 0.0;
-  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-  return lengths[lengths.size() / 2];
-}
-
 // The wedge fitted to `points` sharp and rounded: the least sums of squared residuals, the radius
 // (searched over log r between `smallest` and `largest`: a grid, then golden section around its
 // best) and the offsets of the rounded one. None when no rounding fits better than the sharp corner,
@@ -574,11 +563,13 @@ std::vector<char> split_tangent_continuations(const TriangleMesh& mesh, const Me
     // The faces past the tangent point go to the line's surface: a cylinder along the axis, or a
     // plane across it.
     std::vector<int> past, kept;
-    for (int f : faces_of[t])
-      ((section.profile(face_centroid(mesh, f)) - touch).dot(chosen.along) > 0.0 ? past : kept).push_back(f);
+    double length = 0.0;  // how far the line runs past the tangent point
+    for (int f : faces_of[t]) {
+      const double beyond = (section.profile(face_centroid(mesh, f)) - touch).dot(chosen.along);
+      (beyond > 0.0 ? past : kept).push_back(f);
+      length = std::max(length, beyond);
+    }
     // Both parts must be features, and the line longer than a sharp edge's rounding.
-    double length = 0.0;
-    for (int f : past) length = std::max(length, (section.profile(face_centroid(mesh, f)) - touch).dot(chosen.along));
     if (static_cast<int>(distinct_vertices(mesh, past, vertex_seen).size()) <= 2 * parameter_count(SurfaceType::Cylinder) ||
         static_cast<int>(distinct_vertices(mesh, kept, vertex_seen).size()) <= 2 * parameter_count(SurfaceType::Torus) ||
         length < options.shortest_arc * edge)

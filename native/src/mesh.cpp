@@ -147,4 +147,16 @@ double bounding_box_diagonal(const TriangleMesh& mesh) {
   return (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
 }
 
+double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology) {
+  std::vector<double> lengths(topology.num_edges());
+  for (int e = 0; e < topology.num_edges(); ++e) {
+    const auto& ev = topology.edge_vertices(e);
+    lengths[e] = (mesh.V.row(ev[0]) - mesh.V.row(ev[1])).norm();
+  }
+  if (lengths.empty()) return 0.0;
+  auto middle = lengths.begin() + lengths.size() / 2;
+  std::nth_element(lengths.begin(), middle, lengths.end());
+  return *middle;
+}
+
 }  // namespace idealize

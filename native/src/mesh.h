@@ -90,4 +90,7 @@ Eigen::Vector3d face_centroid(const TriangleMesh& mesh, int f);
 // Length of the bounding-box diagonal (0 for an empty mesh).
 double bounding_box_diagonal(const TriangleMesh& mesh);
 
+// Median length of the mesh's edges (0 for a mesh without edges).
+double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology);
+
 }  // namespace idealize

@@ -13,18 +13,6 @@ namespace {
 constexpr int kBoundary = -1;  // no face across: may be split on one side
 constexpr int kFrozen = -2;    // non-manifold or orientation flip across: never touched
 
-double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology) {
-  std::vector<double> lengths(topology.num_edges());
-  for (int e = 0; e < topology.num_edges(); ++e) {
-    const auto& ev = topology.edge_vertices(e);
-    lengths[e] = (mesh.V.row(ev[0]) - mesh.V.row(ev[1])).norm();
-  }
-  if (lengths.empty()) return 0.0;
-  auto middle = lengths.begin() + lengths.size() / 2;
-  std::nth_element(lengths.begin(), middle, lengths.end());
-  return *middle;
-}
-
 // A triangle mesh that supports edge split and flip, with face-to-face adjacency kept per corner:
 // neighbor[f][c] is the face across the edge opposite corner c of face f.
 class Refiner {
