@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <map>
 #include <optional>
 #include <utility>
+
+#include <Eigen/Eigenvalues>
 
 namespace idealize {
 namespace {
@@ -282,6 +285,26 @@ double independent_share(const TriangleMesh& mesh, const std::vector<Feature>& f
   return (1.0 - rho) / (1.0 + rho);
 }
 
+// The median spread of the features that have a surface (0 if none).
+double typical_feature_spread(const std::vector<Feature>& features) {
+  std::vector<double> spreads;
+  for (const Feature& f : features)
+    if (f.type != SurfaceType::Freeform) spreads.push_back(f.spread);
+  if (spreads.empty()) return 0.0;
+  std::nth_element(spreads.begin(), spreads.begin() + spreads.size() / 2, spreads.end());
+  return spreads[spreads.size() / 2];
+}
+
+// The faces of each feature of one of `types` (none for the others).
+std::vector<std::vector<int>> faces_of_features(const std::vector<int>& labels, const std::vector<Feature>& features,
+                                                std::initializer_list<SurfaceType> types) {
+  std::vector<std::vector<int>> faces(features.size());
+  for (size_t f = 0; f < labels.size(); ++f)
+    if (labels[f] >= 0 && std::find(types.begin(), types.end(), features[labels[f]].type) != types.end())
+      faces[labels[f]].push_back(static_cast<int>(f));
+  return faces;
+}
+
 // An even subsample of at most kSamplePoints of `points`.
 std::vector<Vector2> even_sample(const std::vector<Vector2>& points) {
   const size_t step = std::max<size_t>(1, points.size() / kSamplePoints);
@@ -385,6 +408,87 @@ double fit_continuation(const std::vector<Vector2>& points, const Continuation* 
     circle = next;
   }
   return best;
+}
+
+// Running sums of profile points (distance from the axis, height) sorted by height, from which
+// the total least squares line of any run of them and its sum of squared distances follow at once.
+class ProfileRuns {
+ public:
+  explicit ProfileRuns(const std::vector<Vector2>& sorted) : sums_(sorted.size() + 1, Sums{}) {
+    for (size_t i = 0; i < sorted.size(); ++i) {
+      const Vector2& x = sorted[i];
+      sums_[i + 1] = sums_[i];
+      Sums& s = sums_[i + 1];
+      s.n += 1.0, s.r += x.x(), s.z += x.y(), s.rr += x.x() * x.x(), s.zz += x.y() * x.y(), s.rz += x.x() * x.y();
+    }
+  }
+  // The line of points [begin, end): its mean point and unit direction (rising in height); the
+  // sum of squared distances from it.
+  double line(size_t begin, size_t end, Vector2& mean, Vector2& direction) const {
+    const Sums &a = sums_[begin], &b = sums_[end];
+    const double n = b.n - a.n;
+    mean = Vector2(b.r - a.r, b.z - a.z) / n;
+    Eigen::Matrix2d scatter;
+    scatter << b.rr - a.rr - n * mean.x() * mean.x(), b.rz - a.rz - n * mean.x() * mean.y(),
+        b.rz - a.rz - n * mean.x() * mean.y(), b.zz - a.zz - n * mean.y() * mean.y();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(scatter);
+    direction = eigen.eigenvectors().col(1);
+    if (direction.y() < 0.0) direction = -direction;
+    return std::max(eigen.eigenvalues()[0], 0.0);
+  }
+  double sum(size_t begin, size_t end) const {
+    Vector2 mean, direction;
+    return line(begin, end, mean, direction);
+  }
+
+ private:
+  struct Sums {
+    double n = 0.0, r = 0.0, z = 0.0, rr = 0.0, zz = 0.0, rz = 0.0;
+  };
+  std::vector<Sums> sums_;
+};
+
+// The least sum of squared residuals of a profile's points from a parabola about its line through
+// `mean` along `direction` (the offset across the line quadratic in the length along it).
+double parabola_sum(const std::vector<Vector2>& profile, const Vector2& mean, const Vector2& direction) {
+  const int n = static_cast<int>(profile.size());
+  std::vector<double> along(n);
+  for (int i = 0; i < n; ++i) along[i] = (profile[i] - mean).dot(direction);
+  const auto [low, high] = std::minmax_element(along.begin(), along.end());
+  const double middle = 0.5 * (*low + *high), scale = std::max(0.5 * (*high - *low), 1e-12);
+  Eigen::MatrixX3d design(n, 3);
+  Eigen::VectorXd offset(n);
+  for (int i = 0; i < n; ++i) {
+    const double t = (along[i] - middle) / scale;
+    design.row(i) << 1.0, t, t * t;
+    const Vector2 v = profile[i] - mean;
+    offset[i] = v.x() * direction.y() - v.y() * direction.x();
+  }
+  const Eigen::Vector3d c = design.colPivHouseholderQr().solve(offset);
+  return (design * c - offset).squaredNorm();
+}
+
+// The surface about `axis` through `origin` whose profile is the line through `mean` along
+// `direction` (distance from the axis, height): a cylinder, a plane across the axis or a cone.
+Surface revolved_line(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis, const Vector2& mean,
+                      const Vector2& direction, double angle_tolerance) {
+  Surface s;
+  s.axis = axis;
+  if (std::abs(direction.x()) < std::sin(angle_tolerance)) {
+    s.type = SurfaceType::Cylinder;
+    s.point = origin;
+    s.radius = mean.x();
+  } else if (std::abs(direction.y()) < std::sin(angle_tolerance)) {
+    s.type = SurfaceType::Plane;
+    s.point = origin + mean.y() * axis;
+  } else {  // the apex where the line meets the axis; the axis towards the opening
+    s.type = SurfaceType::Cone;
+    const double slope = direction.x() / direction.y();  // radius gained per height
+    s.point = origin + (mean.y() - mean.x() / slope) * axis;
+    s.half_angle = std::atan(std::abs(slope));
+    if (slope < 0.0) s.axis = -axis;
+  }
+  return s;
 }
 
 }  // namespace
@@ -521,9 +625,7 @@ std::vector<char> split_tangent_continuations(const TriangleMesh& mesh, const Me
   const double edge = median_edge_length(mesh, topology);
   if (!(edge > 0.0)) return changed;
   const double independent = independent_share(mesh, features, labels);
-  std::vector<std::vector<int>> faces_of(features.size());
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    if (labels[f] >= 0 && features[labels[f]].type == SurfaceType::Torus) faces_of[labels[f]].push_back(f);
+  std::vector<std::vector<int>> faces_of = faces_of_features(labels, features, {SurfaceType::Torus});
   std::vector<char> vertex_seen(mesh.num_vertices(), 0);
   const size_t existing = features.size();
   for (size_t t = 0; t < existing; ++t) {
@@ -595,6 +697,112 @@ std::vector<char> split_tangent_continuations(const TriangleMesh& mesh, const Me
     features.push_back(line);
     changed.resize(features.size(), 0);
     changed[t] = changed.back() = 1;
+  }
+  return changed;
+}
+
+std::vector<char> split_coaxial_steps(const TriangleMesh& mesh, const MeshTopology& topology,
+                                      const EdgeFilletOptions& options, std::vector<Feature>& features,
+                                      std::vector<int>& labels) {
+  std::vector<char> changed(features.size(), 0);
+  const double edge = median_edge_length(mesh, topology);
+  if (!(edge > 0.0)) return changed;
+  const double independent = independent_share(mesh, features, labels);
+  const double typical_spread = typical_feature_spread(features);
+  std::vector<std::vector<int>> faces_of = faces_of_features(labels, features, {SurfaceType::Cylinder, SurfaceType::Cone});
+  std::vector<char> vertex_seen(mesh.num_vertices(), 0);
+  // A split part is split again: a counterbore's two cylinders and the cone between them.
+  for (size_t t = 0; t < features.size(); ++t) {
+    if (features[t].type != SurfaceType::Cylinder && features[t].type != SurfaceType::Cone) continue;
+    const Surface source = features[t].surface;
+    const Eigen::Vector3d axis = source.axis, origin = source.point;
+    auto profile = [&](const Eigen::Vector3d& p) {
+      const AxialCoordinates c = axial_coordinates(origin, axis, p);
+      return Vector2(c.distance, c.height);
+    };
+    // The vertices inside the patch (its rim lies on the rounded-off edges of a scan), or all of
+    // them where too few are inside.
+    std::vector<Vector2> inside, rim;
+    for (int v : distinct_vertices(mesh, faces_of[t], vertex_seen)) {
+      const bool interior = std::all_of(topology.vertex_faces_begin(v), topology.vertex_faces_end(v),
+                                        [&](int f) { return labels[f] == static_cast<int>(t); });
+      (interior ? inside : rim).push_back(profile(mesh.V.row(v).transpose()));
+    }
+    const int least = 2 * parameter_count(SurfaceType::Cone);  // points on each side of a step
+    if (static_cast<int>(inside.size()) < 2 * least) inside.insert(inside.end(), rim.begin(), rim.end());
+    std::vector<Vector2> sample = even_sample(inside);
+    const int n = static_cast<int>(sample.size());
+    if (n < 2 * least) continue;
+    std::sort(sample.begin(), sample.end(), [](const Vector2& a, const Vector2& b) { return a.y() < b.y(); });
+
+    // One line, or two meeting at a height (a step, a bend): three parameters more, kept where
+    // the BIC over the independent residuals prefers them.
+    const ProfileRuns runs(sample);
+    const double whole = runs.sum(0, n);
+    double best = std::numeric_limits<double>::infinity();
+    int split = 0;
+    for (int k = least; k <= n - least; ++k) {
+      const double value = runs.sum(0, k) + runs.sum(k, n);
+      if (value < best) best = value, split = k;
+    }
+    // The BIC prefers the step to the one line and to a smooth bend of the profile with two
+    // parameters less (a parabola about the line: a sculpted part's undulation, the profile of a
+    // torus taken for a cylinder), and the noise explains its lines.
+    const double variance = best / std::max(n - 5, 1), penalty = std::log(std::max(independent * n, 2.0)) * variance;
+    Vector2 mean, direction;
+    runs.line(0, n, mean, direction);
+    const double bend = parabola_sum(sample, mean, direction);
+    if (!(independent * (whole - best) > 3.0 * penalty) || !(independent * (bend - best) > 2.0 * penalty))
+      continue;
+    if (sample[split - 1].y() - sample.front().y() < options.shortest_arc * edge ||
+        sample.back().y() - sample[split].y() < options.shortest_arc * edge)
+      continue;  // a part no longer than a rounded-off edge
+
+    Vector2 lower_mean, lower_direction, upper_mean, upper_direction;
+    runs.line(0, split, lower_mean, lower_direction);
+    runs.line(split, n, upper_mean, upper_direction);
+    const Surface lower = revolved_line(origin, axis, lower_mean, lower_direction, options.angle_tolerance);
+    const Surface upper = revolved_line(origin, axis, upper_mean, upper_direction, options.angle_tolerance);
+    // A cylinder beside another of a clearly different radius (a long cylinder's undulation tilts its
+    // halves' profiles apart; relations take radii that close for equal), or beside a cone. Not two
+    // cones: a short cone's fitted axis may tilt, and then its profile about it smears into a band
+    // that two lines fit better than one.
+    if (lower.type == SurfaceType::Plane || upper.type == SurfaceType::Plane ||
+        (lower.type != SurfaceType::Cylinder && upper.type != SurfaceType::Cylinder))
+      continue;
+    if (lower.type == upper.type && std::abs(lower.radius - upper.radius) <=
+                                        options.radius_tolerance * std::max(lower.radius, upper.radius) + features[t].spread)
+      continue;
+
+    // Each face goes to the part whose line alone explains its centroid; by height where both lines
+    // or neither do (at a bend; the rim).
+    auto near = [&](const Vector2& x, const Vector2& mean, const Vector2& direction) {
+      const Vector2 v = x - mean;
+      return std::abs(v.x() * direction.y() - v.y() * direction.x()) <= options.residual_ratio * typical_spread;
+    };
+    const double height = 0.5 * (sample[split - 1].y() + sample[split].y());
+    std::vector<int> below, above;
+    for (int f : faces_of[t]) {
+      const Vector2 x = profile(face_centroid(mesh, f));
+      const bool near_lower = near(x, lower_mean, lower_direction), near_upper = near(x, upper_mean, upper_direction);
+      (near_lower != near_upper ? near_lower : x.y() < height) ? below.push_back(f) : above.push_back(f);
+    }
+    if (static_cast<int>(distinct_vertices(mesh, below, vertex_seen).size()) <= least ||
+        static_cast<int>(distinct_vertices(mesh, above, vertex_seen).size()) <= least)
+      continue;
+    features[t].surface = lower;
+    features[t].type = features[t].curvature_type = lower.type;
+    faces_of[t] = below;
+    Feature part;
+    part.id = static_cast<int>(features.size());
+    part.surface = upper;
+    part.type = part.curvature_type = upper.type;
+    for (int f : above) labels[f] = part.id;
+    features.push_back(part);
+    faces_of.push_back(above);
+    changed.resize(features.size(), 0);
+    changed[t] = changed.back() = 1;
+    --t;  // each part may step again
   }
   return changed;
 }

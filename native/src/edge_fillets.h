@@ -33,6 +33,8 @@ struct EdgeFilletOptions {
   // The band must fit the rounded wedge with a spread of at most this many times the planes' own
   // (as identification accepts a surface: FeatureOptions::residual_ratio).
   double residual_ratio = 1.5;
+  // Radii within this fraction of each other are one design radius (FeatureOptions::radius_tolerance).
+  double radius_tolerance = 0.05;
   // The shortest arc (in median edge lengths) that is a fillet: uniform re-tessellation cuts a sharp
   // edge with a strip of facets up to an edge wide, and a sculpted mesh's displacement along vertex
   // normals (averaged across the edge) rounds it over as much. Measured on the benchmark: the
@@ -60,5 +62,19 @@ std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topo
 std::vector<char> split_tangent_continuations(const TriangleMesh& mesh, const MeshTopology& topology,
                                               const EdgeFilletOptions& options, std::vector<Feature>& features,
                                               std::vector<int>& labels);
+
+// A cylinder or cone feature that holds coaxial surfaces of another radius or angle (a
+// counterbore's two cylinders, a cone running into a cylinder: at a scan's resolution their
+// curvatures differ little): through the axis, its vertices' profile (distance from the axis,
+// height) is one line, or two that meet at a height. The two have three parameters more (a line and
+// the height), kept where the BIC over the independent residuals prefers them to the one line and
+// to a parabola (a smooth bend: undulation, a torus taken for a cylinder), both parts are longer
+// than a rounded-off edge, and one is a cylinder, the other a cone or a cylinder of a clearly
+// different radius. The faces above that
+// height (or that only the upper line explains) become a feature of their own, and each part may
+// step again. Returns, per feature after the call, whether it changed.
+std::vector<char> split_coaxial_steps(const TriangleMesh& mesh, const MeshTopology& topology,
+                                      const EdgeFilletOptions& options, std::vector<Feature>& features,
+                                      std::vector<int>& labels);
 
 }  // namespace idealize

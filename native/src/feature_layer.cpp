@@ -1343,7 +1343,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     EdgeFilletOptions edges;
     edges.angle_tolerance = shared.angle_tolerance;
     edges.residual_ratio = options.residual_ratio;
-    for (auto find : {round_edges, split_tangent_continuations}) {
+    edges.radius_tolerance = options.radius_tolerance;
+    for (auto find : {round_edges, split_tangent_continuations, split_coaxial_steps}) {
       const size_t existing = layer.features.size();
       const std::vector<char> changed = find(mesh, topology, edges, layer.features, layer.labels);
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) continue;
