@@ -18,4 +18,10 @@ void build_feature_graph(const TriangleMesh& mesh, const MeshTopology& topology,
                          double radius_tolerance, std::vector<FeatureAdjacency>& adjacency,
                          std::vector<FeatureRelation>& relations);
 
+// Whether two features with radii (cylinders, spheres; tori by their tube) have one design radius:
+// equal within the larger of the distance tolerance and `radius_tolerance` times the radius, plus
+// the spread of the looser fit (a sculpted surface's undulation moves a fillet's points, and so its
+// radius, by about as much as it scatters them).
+bool equal_radii(const Feature& a, const Feature& b, double distance_tolerance, double radius_tolerance);
+
 }  // namespace idealize

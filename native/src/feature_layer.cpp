@@ -1344,9 +1344,12 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     edges.angle_tolerance = shared.angle_tolerance;
     edges.residual_ratio = options.residual_ratio;
     edges.radius_tolerance = options.radius_tolerance;
+    std::vector<char> touched;  // features the finders made or changed
     for (auto find : {round_edges, split_tangent_continuations, split_coaxial_steps}) {
       const size_t existing = layer.features.size();
       const std::vector<char> changed = find(mesh, topology, edges, layer.features, layer.labels);
+      touched.resize(changed.size(), 0);
+      for (size_t p = 0; p < changed.size(); ++p) touched[p] |= changed[p];
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) continue;
       const std::vector<PatchPoints> now = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
       for (size_t p = 0; p < layer.features.size(); ++p) {
@@ -1364,6 +1367,31 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         f.vertices = static_cast<int>(now[p].points.rows());
       }
       count_faces(area, layer.labels, layer.features);
+    }
+    // A surface that the stages between merging and here left in two pieces (a sculpted cylinder
+    // whose pieces' fits differ by its undulation, a narrow piece whose rim went to a neighbour)
+    // merges now where one surface fits both as merging requires. Only alike pieces are tried (one
+    // type, parallel, radii that relations would take for equal), and not two that the finders
+    // above just split apart.
+    {
+      std::set<std::pair<int, int>> apart;
+      touched.resize(layer.features.size(), 0);
+      const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
+      auto alike = [&](const Feature& a, const Feature& b) {
+        if (a.type != b.type || a.type == SurfaceType::Freeform) return false;
+        if (a.surface.has_direction() && std::abs(a.surface.axis.dot(b.surface.axis)) < std::cos(angle_tolerance)) return false;
+        if (a.type == SurfaceType::Cone) return std::abs(a.surface.half_angle - b.surface.half_angle) <= angle_tolerance;
+        return a.type == SurfaceType::Plane || equal_radii(a, b, layer.distance_tolerance, options.radius_tolerance);
+      };
+      for (const auto& [pair, turn] : boundary_turns(mesh, topology, layer.labels))
+        if ((touched[pair.first] && touched[pair.second]) || !alike(layer.features[pair.first], layer.features[pair.second]))
+          apart.insert(pair);
+      const std::vector<PatchPoints> now = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+      if (merge_patches(mesh, topology, now, identify_points, options, layer.distance_tolerance, false, exact_distance, noise,
+                        layer.features, layer.labels, apart, progress.sub("remerge", 0.98, 0.98))) {
+        compact_features(layer.labels, layer.features);
+        count_faces(area, layer.labels, layer.features);
+      }
     }
     stage("edge_fillets");
   }
