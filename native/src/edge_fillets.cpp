@@ -42,6 +42,16 @@ struct Section {
   }
 };
 
+// The section through the axis of `s` (a cylinder, cone or torus), from its point.
+Section axial_section(const Surface& s) {
+  Section section;
+  section.around_axis = true;
+  section.origin = s.point;
+  section.direction = s.axis;
+  orthonormal_frame(section.direction, section.e1, section.e2);
+  return section;
+}
+
 // A surface's line in the section: a point of it and a unit direction.
 struct ProfileLine {
   Vector2 point, direction;
@@ -303,6 +313,39 @@ std::vector<std::vector<int>> faces_of_features(const std::vector<int>& labels, 
     if (labels[f] >= 0 && std::find(types.begin(), types.end(), features[labels[f]].type) != types.end())
       faces[labels[f]].push_back(static_cast<int>(f));
   return faces;
+}
+
+// The profile (`profile` of each point) of the vertices of `faces` (feature `label`) that only its
+// faces touch: the rim of a scan's patch lies on the rounded-off edges. All of them where fewer
+// than `least` are inside. `seen` (#V, all 0) is left as it was.
+template <class ProfileOf>
+std::vector<Vector2> inner_profile(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
+                                   int label, const std::vector<int>& faces, int least, const ProfileOf& profile,
+                                   std::vector<char>& seen) {
+  std::vector<Vector2> inside, rim;
+  for (int v : distinct_vertices(mesh, faces, seen)) {
+    const bool interior = std::all_of(topology.vertex_faces_begin(v), topology.vertex_faces_end(v),
+                                      [&](int f) { return labels[f] == label; });
+    (interior ? inside : rim).push_back(profile(mesh.V.row(v).transpose()));
+  }
+  if (static_cast<int>(inside.size()) < least) inside.insert(inside.end(), rim.begin(), rim.end());
+  return inside;
+}
+
+// What the finders measure of the mesh first: its median edge length (0 for none), the share of
+// its residuals that counts as independent, and the typical feature's spread.
+struct MeshScale {
+  double edge = 0.0, independent = 0.0, typical_spread = 0.0;
+};
+
+MeshScale mesh_scale(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<Feature>& features,
+                     const std::vector<int>& labels) {
+  MeshScale scale;
+  scale.edge = median_edge_length(mesh, topology);
+  if (!(scale.edge > 0.0)) return scale;
+  scale.independent = independent_share(mesh, features, labels);
+  scale.typical_spread = typical_feature_spread(features);
+  return scale;
 }
 
 // An even subsample of at most kSamplePoints of `points`.
@@ -622,20 +665,16 @@ std::vector<char> split_tangent_continuations(const TriangleMesh& mesh, const Me
                                               const EdgeFilletOptions& options, std::vector<Feature>& features,
                                               std::vector<int>& labels) {
   std::vector<char> changed(features.size(), 0);
-  const double edge = median_edge_length(mesh, topology);
-  if (!(edge > 0.0)) return changed;
-  const double independent = independent_share(mesh, features, labels);
+  const MeshScale scale = mesh_scale(mesh, topology, features, labels);
+  if (!(scale.edge > 0.0)) return changed;
+  const double edge = scale.edge, independent = scale.independent;
   std::vector<std::vector<int>> faces_of = faces_of_features(labels, features, {SurfaceType::Torus});
   std::vector<char> vertex_seen(mesh.num_vertices(), 0);
   const size_t existing = features.size();
   for (size_t t = 0; t < existing; ++t) {
     if (features[t].type != SurfaceType::Torus) continue;
     const Surface torus = features[t].surface;
-    Section section;
-    section.around_axis = true;
-    section.origin = torus.point;
-    section.direction = torus.axis;
-    orthonormal_frame(section.direction, section.e1, section.e2);
+    const Section section = axial_section(torus);
     std::vector<Vector2> profile;
     for (int v : distinct_vertices(mesh, faces_of[t], vertex_seen)) profile.push_back(section.profile(mesh.V.row(v).transpose()));
     if (static_cast<int>(profile.size()) <= 2 * parameter_count(SurfaceType::Torus)) continue;
@@ -705,10 +744,9 @@ std::vector<char> split_coaxial_steps(const TriangleMesh& mesh, const MeshTopolo
                                       const EdgeFilletOptions& options, std::vector<Feature>& features,
                                       std::vector<int>& labels) {
   std::vector<char> changed(features.size(), 0);
-  const double edge = median_edge_length(mesh, topology);
-  if (!(edge > 0.0)) return changed;
-  const double independent = independent_share(mesh, features, labels);
-  const double typical_spread = typical_feature_spread(features);
+  const MeshScale scale = mesh_scale(mesh, topology, features, labels);
+  if (!(scale.edge > 0.0)) return changed;
+  const double edge = scale.edge, independent = scale.independent, typical_spread = scale.typical_spread;
   std::vector<std::vector<int>> faces_of = faces_of_features(labels, features, {SurfaceType::Cylinder, SurfaceType::Cone});
   std::vector<char> vertex_seen(mesh.num_vertices(), 0);
   // A split part is split again: a counterbore's two cylinders and the cone between them.
@@ -716,21 +754,11 @@ std::vector<char> split_coaxial_steps(const TriangleMesh& mesh, const MeshTopolo
     if (features[t].type != SurfaceType::Cylinder && features[t].type != SurfaceType::Cone) continue;
     const Surface source = features[t].surface;
     const Eigen::Vector3d axis = source.axis, origin = source.point;
-    auto profile = [&](const Eigen::Vector3d& p) {
-      const AxialCoordinates c = axial_coordinates(origin, axis, p);
-      return Vector2(c.distance, c.height);
-    };
-    // The vertices inside the patch (its rim lies on the rounded-off edges of a scan), or all of
-    // them where too few are inside.
-    std::vector<Vector2> inside, rim;
-    for (int v : distinct_vertices(mesh, faces_of[t], vertex_seen)) {
-      const bool interior = std::all_of(topology.vertex_faces_begin(v), topology.vertex_faces_end(v),
-                                        [&](int f) { return labels[f] == static_cast<int>(t); });
-      (interior ? inside : rim).push_back(profile(mesh.V.row(v).transpose()));
-    }
+    const Section section = axial_section(source);
+    auto profile = [&](const Eigen::Vector3d& p) { return section.profile(p); };
     const int least = 2 * parameter_count(SurfaceType::Cone);  // points on each side of a step
-    if (static_cast<int>(inside.size()) < 2 * least) inside.insert(inside.end(), rim.begin(), rim.end());
-    std::vector<Vector2> sample = even_sample(inside);
+    std::vector<Vector2> sample =
+        even_sample(inner_profile(mesh, topology, labels, static_cast<int>(t), faces_of[t], 2 * least, profile, vertex_seen));
     const int n = static_cast<int>(sample.size());
     if (n < 2 * least) continue;
     std::sort(sample.begin(), sample.end(), [](const Vector2& a, const Vector2& b) { return a.y() < b.y(); });
@@ -803,6 +831,144 @@ std::vector<char> split_coaxial_steps(const TriangleMesh& mesh, const MeshTopolo
     changed.resize(features.size(), 0);
     changed[t] = changed.back() = 1;
     --t;  // each part may step again
+  }
+  return changed;
+}
+
+std::vector<char> split_cornered_tori(const TriangleMesh& mesh, const MeshTopology& topology,
+                                      const EdgeFilletOptions& options, std::vector<Feature>& features,
+                                      std::vector<int>& labels) {
+  std::vector<char> changed(features.size(), 0);
+  const MeshScale scale = mesh_scale(mesh, topology, features, labels);
+  if (!(scale.edge > 0.0)) return changed;
+  const double edge = scale.edge, independent = scale.independent, typical_spread = scale.typical_spread;
+  const std::vector<std::vector<int>> faces_of = faces_of_features(labels, features, {SurfaceType::Torus});
+  std::vector<char> vertex_seen(mesh.num_vertices(), 0);
+  const size_t existing = features.size();
+  for (size_t t = 0; t < existing; ++t) {
+    if (features[t].type != SurfaceType::Torus) continue;
+    const Surface torus = features[t].surface;
+    const Section section = axial_section(torus);
+    auto profile = [&](const Eigen::Vector3d& p) { return section.profile(p); };
+    const int least = 2 * parameter_count(SurfaceType::Cone);  // points on each line
+    const std::vector<Vector2> points = even_sample(
+        inner_profile(mesh, topology, labels, static_cast<int>(t), faces_of[t], 3 * least, profile, vertex_seen));
+    const int n = static_cast<int>(points.size());
+    if (n < 3 * least) continue;
+    // Only a torus that its patch's profile does not fit as well as the mesh's features fit theirs
+    // (lines placed as the nearest to each point fit a small arc's noise better than the arc does).
+    Eigen::Vector3d circle(torus.radius, 0.0, torus.minor);
+    const double round = fit_continuation(points, {}, circle);
+    if (std::sqrt(round / (n - 3)) <= options.residual_ratio * typical_spread) continue;
+
+    // Lines along the axis (cylinders) and across it (planes) in turn, each point on the nearest:
+    // a corner (one of each) or a step (three). Fitted from the extreme distances and heights of
+    // the points by alternating assignment and refit; the parameters counted are the lines'
+    // positions and, for each corner between them, one more (where it lies on either line).
+    std::vector<double> radii, heights;
+    for (const Vector2& x : points) radii.push_back(x.x()), heights.push_back(x.y());
+    std::sort(radii.begin(), radii.end());
+    std::sort(heights.begin(), heights.end());
+    const double r_low = radii[n / 20], r_high = radii[n - 1 - n / 20], z_low = heights[n / 20],
+                 z_high = heights[n - 1 - n / 20], z_middle = heights[n / 2], r_middle = radii[n / 2];
+    struct Staircase {
+      std::vector<std::pair<bool, double>> lines;  // (along the axis, its distance or height)
+      double sum = std::numeric_limits<double>::infinity();
+    };
+    auto nearest = [](const Staircase& c, const Vector2& x, double& residual) {
+      int best = 0;
+      residual = std::numeric_limits<double>::infinity();
+      for (size_t i = 0; i < c.lines.size(); ++i) {
+        const double r = (c.lines[i].first ? x.x() : x.y()) - c.lines[i].second;
+        if (std::abs(r) < std::abs(residual)) residual = r, best = static_cast<int>(i);
+      }
+      return best;
+    };
+    auto fit = [&](Staircase c) {
+      for (int iteration = 0; iteration < 10; ++iteration) {
+        std::vector<double> total(c.lines.size(), 0.0);
+        std::vector<int> count(c.lines.size(), 0);
+        c.sum = 0.0;
+        for (const Vector2& x : points) {
+          double residual;
+          const int line = nearest(c, x, residual);
+          c.sum += residual * residual;
+          total[line] += c.lines[line].first ? x.x() : x.y();
+          ++count[line];
+        }
+        for (size_t i = 0; i < c.lines.size(); ++i)
+          if (count[i] < least) return Staircase{};  // a line without points of its own
+          else c.lines[i].second = total[i] / count[i];
+      }
+      return c;
+    };
+    std::vector<Staircase> candidates;
+    for (double r : {r_low, r_high})
+      for (double z : {z_low, z_high}) candidates.push_back(fit(Staircase{{{true, r}, {false, z}}, 0.0}));
+    candidates.push_back(fit(Staircase{{{true, r_low}, {false, z_middle}, {true, r_high}}, 0.0}));
+    candidates.push_back(fit(Staircase{{{false, z_low}, {true, r_middle}, {false, z_high}}, 0.0}));
+    double smallest = round;
+    for (const Staircase& c : candidates) smallest = std::min(smallest, c.sum);
+    const int circle_parameters = 3;
+    const double variance = smallest / std::max(n - 5, 1), penalty = std::log(std::max(independent * n, 2.0)) * variance;
+    const Staircase* chosen = nullptr;
+    double best_score = independent * round;
+    for (const Staircase& c : candidates) {
+      if (c.lines.empty()) continue;
+      const int extra = 2 * static_cast<int>(c.lines.size()) - 1 - circle_parameters;
+      const double score = independent * c.sum + extra * penalty;
+      if (score < best_score) best_score = score, chosen = &c;
+    }
+    if (!chosen) continue;
+
+    // The faces go to the line nearest their centroid; each line must run longer than a
+    // rounded-off edge.
+    std::vector<std::vector<int>> parts(chosen->lines.size());
+    std::vector<double> low(parts.size(), std::numeric_limits<double>::infinity()), high(parts.size(), -low[0]);
+    for (int f : faces_of[t]) {
+      const Vector2 x = profile(face_centroid(mesh, f));
+      double residual;
+      const int line = nearest(*chosen, x, residual);
+      parts[line].push_back(f);
+      const double position = chosen->lines[line].first ? x.y() : x.x();
+      low[line] = std::min(low[line], position), high[line] = std::max(high[line], position);
+    }
+    std::vector<Surface> lines;
+    bool long_enough = true;
+    for (size_t i = 0; i < parts.size(); ++i) {
+      long_enough &= high[i] - low[i] >= options.shortest_arc * edge;
+      Surface s;
+      s.axis = torus.axis;
+      if (chosen->lines[i].first) {
+        s.type = SurfaceType::Cylinder;
+        s.point = torus.point;
+        s.radius = chosen->lines[i].second;
+        long_enough &= s.radius > 0.0;
+      } else {
+        s.type = SurfaceType::Plane;
+        s.point = torus.point + chosen->lines[i].second * torus.axis;
+      }
+      lines.push_back(s);
+    }
+    if (!long_enough) continue;
+    bool features_each = true;
+    for (const std::vector<int>& part : parts)
+      features_each &= static_cast<int>(distinct_vertices(mesh, part, vertex_seen).size()) > least;
+    if (!features_each) continue;
+    for (size_t i = 0; i < lines.size(); ++i) {
+      int id = static_cast<int>(t);
+      if (i > 0) {
+        id = static_cast<int>(features.size());
+        features.emplace_back();
+        features.back().id = id;
+        changed.push_back(0);
+      }
+      Feature& f = features[id];
+      f.surface = lines[i];
+      f.type = f.curvature_type = lines[i].type;
+      for (int face : parts[i]) labels[face] = id;
+      changed[id] = 1;
+    }
   }
   return changed;
 }

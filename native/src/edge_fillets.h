@@ -63,6 +63,18 @@ std::vector<char> split_tangent_continuations(const TriangleMesh& mesh, const Me
                                               const EdgeFilletOptions& options, std::vector<Feature>& features,
                                               std::vector<int>& labels);
 
+// A torus feature that holds cylinders and planes across its axis meeting at sharp corners (a
+// cylinder and the plane at its end; a step: cylinder, annulus, cylinder), which a free torus bends
+// to fit only roughly. Where the torus fits its profile worse than the mesh's features fit theirs,
+// through the axis its vertices fit two or three lines along and across the axis in turn, each
+// point on the nearest: the lines' positions and one more parameter per corner, against the
+// circle's three, kept where the BIC over the independent residuals prefers them and each line
+// runs longer than a rounded-off edge. The faces nearest each line become its cylinder or plane
+// (the torus feature takes the first). Returns, per feature after the call, whether it changed.
+std::vector<char> split_cornered_tori(const TriangleMesh& mesh, const MeshTopology& topology,
+                                      const EdgeFilletOptions& options, std::vector<Feature>& features,
+                                      std::vector<int>& labels);
+
 // A cylinder or cone feature that holds coaxial surfaces of another radius or angle (a
 // counterbore's two cylinders, a cone running into a cylinder: at a scan's resolution their
 // curvatures differ little): through the axis, its vertices' profile (distance from the axis,

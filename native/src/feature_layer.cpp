@@ -1345,7 +1345,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     edges.residual_ratio = options.residual_ratio;
     edges.radius_tolerance = options.radius_tolerance;
     std::vector<char> touched;  // features the finders made or changed
-    for (auto find : {round_edges, split_tangent_continuations, split_coaxial_steps}) {
+    for (auto find : {round_edges, split_tangent_continuations, split_cornered_tori, split_coaxial_steps}) {
       const size_t existing = layer.features.size();
       const std::vector<char> changed = find(mesh, topology, edges, layer.features, layer.labels);
       touched.resize(changed.size(), 0);
