@@ -534,6 +534,26 @@ Surface revolved_line(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis
   return s;
 }
 
+// Gives feature t the first of `surfaces` and the faces of `parts[0]`, and makes each other part a
+// new feature of its surface, relabelling its faces; marks all of them changed.
+void split_feature(size_t t, const std::vector<Surface>& surfaces, const std::vector<std::vector<int>>& parts,
+                   std::vector<Feature>& features, std::vector<int>& labels, std::vector<char>& changed) {
+  for (size_t i = 0; i < surfaces.size(); ++i) {
+    int id = static_cast<int>(t);
+    if (i > 0) {
+      id = static_cast<int>(features.size());
+      features.emplace_back();
+      features.back().id = id;
+      changed.push_back(0);
+    }
+    Feature& f = features[id];
+    f.surface = surfaces[i];
+    f.type = f.curvature_type = surfaces[i].type;
+    for (int face : parts[i]) labels[face] = id;
+    changed[id] = 1;
+  }
+}
+
 }  // namespace
 
 std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topology, const EdgeFilletOptions& options,
@@ -715,18 +735,10 @@ std::vector<char> split_tangent_continuations(const TriangleMesh& mesh, const Me
         static_cast<int>(distinct_vertices(mesh, kept, vertex_seen).size()) <= 2 * parameter_count(SurfaceType::Torus) ||
         length < options.shortest_arc * edge)
       continue;
-    Feature line;
+    Feature line;  // a cylinder (the line along the axis) or a plane across it
     line.id = static_cast<int>(features.size());
-    if (std::abs(chosen.along.y()) > 0.5) {  // along the axis
-      if (!(touch.x() > 0.0)) continue;
-      line.surface.type = SurfaceType::Cylinder;
-      line.surface.point = torus.point;
-      line.surface.radius = touch.x();
-    } else {
-      line.surface.type = SurfaceType::Plane;
-      line.surface.point = torus.point + touch.y() * torus.axis;
-    }
-    line.surface.axis = torus.axis;
+    line.surface = revolved_line(torus.point, torus.axis, touch, chosen.along, options.angle_tolerance);
+    if (line.surface.type == SurfaceType::Cylinder && !(touch.x() > 0.0)) continue;
     line.type = line.curvature_type = line.surface.type;
     Surface& ring = features[t].surface;
     ring.point = torus.point + centre.y() * torus.axis;
@@ -775,7 +787,7 @@ std::vector<char> split_coaxial_steps(const TriangleMesh& mesh, const MeshTopolo
     }
     // The BIC prefers the step to the one line and to a smooth bend of the profile with two
     // parameters less (a parabola about the line: a sculpted part's undulation, the profile of a
-    // torus taken for a cylinder), and the noise explains its lines.
+    // torus taken for a cylinder).
     const double variance = best / std::max(n - 5, 1), penalty = std::log(std::max(independent * n, 2.0)) * variance;
     Vector2 mean, direction;
     runs.line(0, n, mean, direction);
@@ -818,18 +830,9 @@ std::vector<char> split_coaxial_steps(const TriangleMesh& mesh, const MeshTopolo
     if (static_cast<int>(distinct_vertices(mesh, below, vertex_seen).size()) <= least ||
         static_cast<int>(distinct_vertices(mesh, above, vertex_seen).size()) <= least)
       continue;
-    features[t].surface = lower;
-    features[t].type = features[t].curvature_type = lower.type;
+    split_feature(t, {lower, upper}, {below, above}, features, labels, changed);
     faces_of[t] = below;
-    Feature part;
-    part.id = static_cast<int>(features.size());
-    part.surface = upper;
-    part.type = part.curvature_type = upper.type;
-    for (int f : above) labels[f] = part.id;
-    features.push_back(part);
     faces_of.push_back(above);
-    changed.resize(features.size(), 0);
-    changed[t] = changed.back() = 1;
     --t;  // each part may step again
   }
   return changed;
@@ -858,7 +861,7 @@ std::vector<char> split_cornered_tori(const TriangleMesh& mesh, const MeshTopolo
     // Only a torus that its patch's profile does not fit as well as the mesh's features fit theirs
     // (lines placed as the nearest to each point fit a small arc's noise better than the arc does).
     Eigen::Vector3d circle(torus.radius, 0.0, torus.minor);
-    const double round = fit_continuation(points, {}, circle);
+    const double round = fit_continuation(points, nullptr, circle);
     if (std::sqrt(round / (n - 3)) <= options.residual_ratio * typical_spread) continue;
 
     // Lines along the axis (cylinders) and across it (planes) in turn, each point on the nearest:
@@ -936,39 +939,16 @@ std::vector<char> split_cornered_tori(const TriangleMesh& mesh, const MeshTopolo
     std::vector<Surface> lines;
     bool long_enough = true;
     for (size_t i = 0; i < parts.size(); ++i) {
-      long_enough &= high[i] - low[i] >= options.shortest_arc * edge;
-      Surface s;
-      s.axis = torus.axis;
-      if (chosen->lines[i].first) {
-        s.type = SurfaceType::Cylinder;
-        s.point = torus.point;
-        s.radius = chosen->lines[i].second;
-        long_enough &= s.radius > 0.0;
-      } else {
-        s.type = SurfaceType::Plane;
-        s.point = torus.point + chosen->lines[i].second * torus.axis;
-      }
-      lines.push_back(s);
+      const auto [along_axis, position] = chosen->lines[i];
+      long_enough &= high[i] - low[i] >= options.shortest_arc * edge && (!along_axis || position > 0.0);
+      lines.push_back(revolved_line(torus.point, torus.axis, along_axis ? Vector2(position, 0.0) : Vector2(0.0, position),
+                                    along_axis ? Vector2(0.0, 1.0) : Vector2(1.0, 0.0), options.angle_tolerance));
     }
     if (!long_enough) continue;
     bool features_each = true;
     for (const std::vector<int>& part : parts)
       features_each &= static_cast<int>(distinct_vertices(mesh, part, vertex_seen).size()) > least;
-    if (!features_each) continue;
-    for (size_t i = 0; i < lines.size(); ++i) {
-      int id = static_cast<int>(t);
-      if (i > 0) {
-        id = static_cast<int>(features.size());
-        features.emplace_back();
-        features.back().id = id;
-        changed.push_back(0);
-      }
-      Feature& f = features[id];
-      f.surface = lines[i];
-      f.type = f.curvature_type = lines[i].type;
-      for (int face : parts[i]) labels[face] = id;
-      changed[id] = 1;
-    }
+    if (features_each) split_feature(t, lines, parts, features, labels, changed);
   }
   return changed;
 }
