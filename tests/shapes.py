@@ -1,4 +1,5 @@
 """Analytic test meshes made with numpy, and CAD parts made with FreeCAD (when available)."""
+import importlib
 import sys
 from pathlib import Path
 
@@ -182,11 +183,21 @@ def shared_part(name):
     return max(Part.read(str(SHARED_STEP / name)).Solids, key=lambda s: s.Volume)
 
 
-def benchmark_mesh(name, variant):
-    """The benchmark's `variant` ("cad", "scan" or "sculpt") of the STEP part `name`, made (and
-    cached) by bench/datasets.py: a mesh with V, F, gt (B-rep face per triangle) and face_types."""
+def bench_module(module):
+    """A module of bench/ (imported from beside tests/)."""
     bench = str(Path(__file__).resolve().parents[1] / "bench")
     if bench not in sys.path:
         sys.path.insert(0, bench)
-    import datasets
-    return datasets.load_part(SHARED_STEP / name, [variant], log=lambda *_: None)[0]
+    return importlib.import_module(module)
+
+
+def benchmark_mesh(name, variant):
+    """The benchmark's `variant` ("cad", "scan" or "sculpt") of the STEP part `name`, made (and
+    cached) by bench/datasets.py: a mesh with V, F, gt (B-rep face per triangle) and face_types."""
+    return bench_module("datasets").load_part(SHARED_STEP / name, [variant], log=lambda *_: None)[0]
+
+
+def benchmark_truth(name):
+    """What the B-rep benchmark compares with for the STEP part `name`: "faces", "surface_types"
+    (faces on one surface joined), "volume" (bench/run_brep.py)."""
+    return bench_module("run_brep").ground_truth_solid(name)

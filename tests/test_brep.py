@@ -288,6 +288,24 @@ def test_cad_export_of_corner_balls_gives_spheres():
 
 @needs_freecad
 @shapes.needs_shared_data
+@pytest.mark.parametrize("name", ["as_isolated_blends_test_12.stp", "as_customblend_05.step"])
+def test_benchmarks_cad_mesh_keeps_slivers_and_narrow_bands(name):
+    """The benchmark's CAD tessellations: as_isolated_blends_test_12 has a step of 0.03 mm (two
+    triangles), which the plane beside it took whole; as_customblend_05 lies 10 m from the origin
+    (its coordinates rounded to 2.5 µm) and has a cylinder one facet high between a plane and a
+    fillet of r 0.72, whose first facets the planar split put with the cylinder's, and whose tori
+    the B-rep then took for a scan's rounded edges. The solid has the part's surfaces."""
+    m = shapes.benchmark_mesh(name, "cad")
+    truth = shapes.benchmark_truth(name)
+    solid = idealize.make_solid(idealize.idealize(Mesh(m.V, m.F)))
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == truth["surface_types"]
+    assert solid.faces == truth["faces"]
+    assert abs(solid.volume / truth["volume"] - 1) < 5e-4
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_scan_of_a_domed_screw_head_gives_its_solid():
     """The benchmark's scan of occt_mal_vis: the flat outer zone of the head's torus fitted a large
     sphere as well, and stayed a face of its own that could not close. The torus takes it; the solid

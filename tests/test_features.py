@@ -845,9 +845,9 @@ def test_pieces_of_one_surface_are_merged_again_after_the_edge_stages(name, vari
     m = shapes.benchmark_mesh(name, variant)
     layer = idealize.idealize(idealize.Mesh(m.V, m.F))
     areas = shapes.triangle_areas(m.V, m.F)
-    import ground_truth, scoring  # bench/, on the path since benchmark_mesh
+    ground_truth = shapes.bench_module("ground_truth")
     surface_of = ground_truth.surface_of_face(ground_truth.part_ground_truth(shapes.SHARED_STEP / name))
-    score = scoring.score(layer.labels, surface_of[m.gt], areas)
+    score = shapes.bench_module("scoring").score(layer.labels, surface_of[m.gt], areas)
     assert score["correct"] == score["faces"], [e for e in score["per_face"] if e["status"] != "correct"]
 
 

@@ -413,6 +413,42 @@ bool absorb_fragments(const TriangleMesh& mesh, const MeshTopology& topology, co
   return any;
 }
 
+// On an exact tessellation, the small pieces that nothing placed once merging has finished may hold
+// facets of two faces that the planar split took for one (the first, narrow facet of a tangent
+// fillet beside a facet of the cylinder it rounds, turned by a fraction of a degree): each of their
+// facets becomes a piece of its own, for merging to place them one by one. A facet takes the id of
+// a patch that merging emptied, and a plane through it. Returns whether any piece fell apart.
+bool shatter_fragments(const TriangleMesh& mesh, const std::vector<PatchPoints>& points, const FeatureOptions& options,
+                       std::vector<Feature>& features, std::vector<int>& labels) {
+  const int num = static_cast<int>(points.size());
+  std::vector<std::vector<int>> facets(num);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (labels[f] >= 0 && points[labels[f]].points.rows() < kInteriorPoints) facets[labels[f]].push_back(f);
+  std::vector<int> free_ids;
+  for (int p = num - 1; p >= 0; --p)
+    if (points[p].points.rows() == 0) free_ids.push_back(p);
+  std::vector<int> slot(mesh.num_vertices(), -1);
+  bool any = false;
+  for (int p = 0; p < num; ++p) {
+    if (facets[p].size() < 2 || facets[p].size() - 1 > free_ids.size()) continue;
+    const Feature piece = features[p];
+    for (size_t i = 0; i < facets[p].size(); ++i) {
+      const int f = facets[p][i];
+      const SurfaceFit plane =
+          fit_surface(SurfaceType::Plane, face_points(mesh, &f, 1, slot, [](int) { return false; }), options.fit);
+      if (!plane.valid) continue;  // a degenerate facet stays with the piece
+      const int id = i == 0 ? p : free_ids.back();  // the first facet keeps the piece's id
+      if (id != p) free_ids.pop_back();
+      features[id] = piece;
+      features[id].id = id;
+      features[id].set_fit(plane);
+      labels[f] = id;
+      any |= id != p;
+    }
+  }
+  return any;
+}
+
 // Merges adjacent patches whose union one surface fits as well as each part alone: a fillet or a
 // cylinder that segmentation split along the facet folds of a coarse tessellation. Patches of one
 // type are refitted together; a patch too small to have interior vertices may also join a
@@ -1052,10 +1088,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   };
   const double diagonal = bounding_box_diagonal(mesh);
   layer.distance_tolerance = options.distance_tolerance > 0.0 ? options.distance_tolerance : 1e-3 * diagonal;
-  // The rounding of single-precision (STL) coordinates, with margin: their spacing grows with the
-  // distance from the origin, which a part far out in its assembly's frame shows.
-  const double floor =
-      std::max(1e-6 * diagonal, 2.0 * std::numeric_limits<float>::epsilon() * mesh.V.cwiseAbs().maxCoeff());
+  const double floor = coordinate_floor(mesh);
 
   const MeshTopology topology(mesh);
   const Eigen::VectorXd area = face_areas(mesh);
@@ -1173,11 +1206,13 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       // There normals count too: a patch fitted to its interior vertices does not see a whole coarse
       // face whose vertices all lie on its rim (a small CAD cylinder inside a plane's patch). On a
       // noisy mesh, where every face has interior vertices, this would split patches that merely
-      // have a rough rim (measured on the benchmark).
+      // have a rough rim (measured on the benchmark). So does the farthest vertex: a step of two
+      // sliver facets beside a plane moves its RMS and its normals' by less than their tiny area.
       const double split_normals_above =
           exact_mesh ? options.split_ratio * normal_noise : std::numeric_limits<double>::infinity();
       auto badly_fitting = [&](const Feature& f) {
-        return f.type == SurfaceType::Freeform || f.rms > split_above || f.normal_rms > split_normals_above;
+        return f.type == SurfaceType::Freeform || f.rms > split_above || f.normal_rms > split_normals_above ||
+               (exact_mesh && f.max_error > split_above);
       };
       // Grows the surfaces that fit discs of patch p. A patch that the histograms call curved has no
       // planar regions: across a disc, the sag of a large fillet hides within the distance tolerance.
@@ -1297,6 +1332,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   // Every merge removes a patch, so on an exact tessellation merging runs until nothing fits together.
   const int merge_passes = exact_mesh ? patches : options.merge_passes;
   int fragment_rounds = 3;
+  bool shattered = false;
   for (int pass = 0; pass < merge_passes; ++pass) {
     const double share = (1.0 - merged_so_far) / 3.0;
     const ProgressSpan this_pass = merge.sub(merged_so_far, merged_so_far + share);
@@ -1308,6 +1344,12 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     if (!merged && exact_mesh && fragment_rounds-- > 0)
       merged = merge_fragments(mesh, topology, points, options, exact_distance, layer.features, layer.labels) ||
                absorb_fragments(mesh, topology, points, layer.distance_tolerance, layer.features, layer.labels);
+    // Once, when nothing else places them, the pieces left fall apart into facets (and the fragment
+    // passes get their rounds again).
+    if (!merged && exact_mesh && !shattered) {
+      shattered = merged = shatter_fragments(mesh, points, options, layer.features, layer.labels);
+      fragment_rounds = 3;
+    }
     if (!merged) break;
     this_pass.step(0.9);
     points = patch_points(mesh, layer.labels, patches);

@@ -1,6 +1,7 @@
 #include "mesh.h"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 
 namespace idealize {
@@ -145,6 +146,11 @@ Eigen::VectorXd face_areas(const TriangleMesh& mesh) {
 double bounding_box_diagonal(const TriangleMesh& mesh) {
   if (mesh.V.rows() == 0) return 0.0;
   return (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
+}
+
+double coordinate_floor(const TriangleMesh& mesh) {
+  if (mesh.V.rows() == 0) return 0.0;
+  return std::max(1e-6 * bounding_box_diagonal(mesh), 2.0 * std::numeric_limits<float>::epsilon() * mesh.V.cwiseAbs().maxCoeff());
 }
 
 double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology) {

@@ -90,6 +90,11 @@ Eigen::Vector3d face_centroid(const TriangleMesh& mesh, int f);
 // Length of the bounding-box diagonal (0 for an empty mesh).
 double bounding_box_diagonal(const TriangleMesh& mesh);
 
+// The least distance that tells two points of the mesh apart: the rounding of single-precision
+// (STL) coordinates, with margin, whose spacing grows with the distance from the origin (which a
+// part far out in its assembly's frame shows); at least a millionth of the diagonal.
+double coordinate_floor(const TriangleMesh& mesh);
+
 // Median length of the mesh's edges (0 for a mesh without edges).
 double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology);
 
