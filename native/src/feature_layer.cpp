@@ -1028,13 +1028,15 @@ void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, co
 
     // A surface that does not explain the vertex does not move it: beyond 3 σ of its fit the vertex
     // lies in a part of the patch the feature does not describe (a fillet too narrow to be found),
-    // unless the noise put it there: within the patch's reach, with neighbours whose mean distance
-    // is within 3 σ of the mean of as many (those in an undescribed part are off together, and so
-    // are those across a sharp edge, where the vertex keeps to 3 σ).
+    // unless the noise put it there: within the patch's reach, with neighbours in the patch whose
+    // mean distance is within 3 σ of the mean of as many (those in an undescribed part are off
+    // together; those across a sharp edge are another surface's: a scan's vertex on a sharp edge
+    // goes to the edge, a small face that no feature took is cut back to its neighbours' edge).
     auto noise_outlier = [&](int p, double sigma) {
       double sum = 0.0;
       int count = 0;
       for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f) {
+        if (labels[*f] != p) continue;
         for (int c = 0; c < 3; ++c)
           if (mesh.F(*f, c) != v) {  // each neighbour twice on a closed fan
             sum += signed_distance(features[p].surface, mesh.V.row(mesh.F(*f, c)).transpose());
