@@ -559,6 +559,28 @@ def test_noise_outliers_on_sharp_edges_go_to_the_edge(name):
     assert deviation["max"] < 1e-3 * m.diag
 
 
+@needs_freecad
+@shapes.needs_shared_data
+def test_fillets_at_the_foot_of_a_boss_touch_the_plane_and_the_cylinder():
+    """The benchmark's scan of occt_Pump_Nut: fillets of r 1 join a boss of r 15 to the faces on
+    either side. Fitted freely to a few degrees of arc, one came out r 1.25 (and in two pieces, one
+    a cone about the axis), the other r 1.06. Tangent to its plane and to the boss, each has one free
+    parameter: the tube radius comes out within 2 %, the tube circle on the cylinder, the centre
+    its tube radius from the plane."""
+    m = shapes.benchmark_mesh("occt_Pump_Nut.step", "scan")
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    tori = [f for f in layer.features if f["type"] == "torus"]
+    cylinders = [f for f in layer.features if f["type"] == "cylinder"]
+    assert len(tori) == 2 and len(cylinders) == 1
+    boss = cylinders[0]["params"]
+    for torus in tori:
+        p = torus["params"]
+        assert abs(p["minor"] - 1.0) < 0.02
+        assert abs(p["major"] - p["minor"] - boss["radius"]) < 1e-9
+        assert any(abs(abs(np.dot(np.subtract(p["center"], plane["params"]["point"]), plane["params"]["normal"])) - p["minor"]) < 1e-9
+                   for plane in layer.features if plane["type"] == "plane")
+
+
 # ---------------------------------------------------------------- 5. freeform
 def wavy_top():
     """A 40 x 30 block whose top is a B-spline surface with 2 mm waves, on planar sides."""

@@ -1422,8 +1422,13 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       touched.resize(layer.features.size(), 0);
       const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
       auto alike = [&](const Feature& a, const Feature& b) {
-        if (a.type != b.type || a.type == SurfaceType::Freeform) return false;
+        if (a.type == SurfaceType::Freeform || b.type == SurfaceType::Freeform) return false;
+        // A zone of a torus between two parallels, which a cone or cylinder about its axis fits.
+        auto zone = [](SurfaceType t) { return t == SurfaceType::Cone || t == SurfaceType::Cylinder; };
+        const bool torus_zone = (a.type == SurfaceType::Torus && zone(b.type)) || (b.type == SurfaceType::Torus && zone(a.type));
+        if (a.type != b.type && !torus_zone) return false;
         if (a.surface.has_direction() && std::abs(a.surface.axis.dot(b.surface.axis)) < std::cos(angle_tolerance)) return false;
+        if (torus_zone) return true;
         if (a.type == SurfaceType::Cone) return std::abs(a.surface.half_angle - b.surface.half_angle) <= angle_tolerance;
         return a.type == SurfaceType::Plane || equal_radii(a, b, layer.distance_tolerance, options.radius_tolerance);
       };
@@ -1436,6 +1441,13 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         compact_features(layer.labels, layer.features);
         count_faces(area, layer.labels, layer.features);
       }
+    }
+    // The tori that the edge stages found or left, now that their neighbours are settled.
+    {
+      std::vector<std::pair<int, int>> adjacent;
+      for (const auto& [pair, turn] : boundary_turns(mesh, topology, layer.labels)) adjacent.push_back(pair);
+      tori_between_planes_and_cylinders(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size())),
+                                        adjacent, shared, layer.features);
     }
     stage("edge_fillets");
   }

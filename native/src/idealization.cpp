@@ -228,6 +228,27 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
     sphere.surface.radius = radius;
   }
 
+  // 8. A torus tangent to a plane across its axis and to a coaxial cylinder (the fillet at the foot
+  // of a boss or the rim of a bore) keeps its tube radius and touches both: its centre lies the tube
+  // radius from the plane, its circle the tube radius from the cylinder.
+  for (Feature& torus : features) {
+    if (torus.type != SurfaceType::Torus) continue;
+    Surface& t = torus.surface;
+    for (const Surface* plane : tangent_surfaces(torus.id, SurfaceType::Plane, relations, features)) {
+      if (std::abs(plane->axis.dot(t.axis)) < cos_tolerance) continue;
+      const double height = (t.point - plane->point).dot(plane->axis);
+      t.point += ((height >= 0.0 ? 1.0 : -1.0) * t.minor - height) * plane->axis;
+      break;
+    }
+    for (const Surface* cylinder : tangent_surfaces(torus.id, SurfaceType::Cylinder, relations, features)) {
+      if (std::abs(cylinder->axis.dot(t.axis)) < cos_tolerance ||
+          axial_coordinates(cylinder->point, cylinder->axis, t.point).distance > options.distance_tolerance)
+        continue;
+      t.radius = t.radius >= cylinder->radius ? cylinder->radius + t.minor : cylinder->radius - t.minor;
+      break;
+    }
+  }
+
   int changed = 0;
   for (size_t i = 0; i < features.size(); ++i) {
     const Surface &a = before[i].surface, &b = features[i].surface;

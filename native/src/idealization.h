@@ -7,7 +7,8 @@
 // orthogonal to it (within the angle tolerance) gives X. A direction within the angle tolerance of
 // a direction in a coordinate plane of that frame at 0, 10, 30, 45, 60 or 90 degrees (and their
 // supplements) from a frame axis snaps to it. Cylinders tangent to planes parallel to their axis
-// move to touch them (keeping their radius). No constraint solver: groups are made consistent one
+// move to touch them (keeping their radius), and so do tori tangent to a plane across their axis
+// or a coaxial cylinder (keeping their tube radius). No constraint solver: groups are made consistent one
 // relation kind at a time, in the order a designer fixes them (directions, then positions, then
 // sizes, then tangency), so an answer always exists.
 #pragma once

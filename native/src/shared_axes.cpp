@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 namespace idealize {
@@ -64,6 +65,27 @@ Eigen::Vector3d outward_normal(const Surface& plane, const FitData& data) {
   return mean.dot(plane.axis) >= 0.0 ? plane.axis : Eigen::Vector3d(-plane.axis);
 }
 
+// Where f is least on [low, high]: on a grid of 60 steps, then by golden section between the grid
+// points beside its least value.
+double least_on_interval(const std::function<double(double)>& f, double low, double high) {
+  constexpr int kGrid = 60;
+  int arg = 0;
+  double least = std::numeric_limits<double>::infinity();
+  for (int i = 0; i <= kGrid; ++i) {
+    const double value = f(low + (high - low) * i / kGrid);
+    if (value < least) least = value, arg = i;
+  }
+  double a = low + (high - low) * std::max(arg - 1, 0) / kGrid;
+  double b = low + (high - low) * std::min(arg + 1, kGrid) / kGrid;
+  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+  for (int i = 0; i < 40; ++i) {
+    const double x1 = b - golden * (b - a), x2 = a + golden * (b - a);
+    if (f(x1) < f(x2)) b = x2;
+    else a = x1;
+  }
+  return 0.5 * (a + b);
+}
+
 // The cylinder tangent to the planes (outward normals n1, n2 through p1, p2) that fits `data` best:
 // its axis runs parallel to their intersection line at distance r from both, inside the part (a
 // rounded edge) or outside (a filleted inner corner). The weighted mean square distance is searched
@@ -97,27 +119,8 @@ SurfaceFit tangent_cylinder(const FitData& data, const Eigen::Vector3d& n1, cons
       return rms * rms;
     };
     // From a thousandth of the strip's size to a hundred times it (a shallow blend of a wide radius).
-    auto search = [&] {
-      const double low = std::log(1e-3 * extent), high = std::log(1e2 * extent);
-      constexpr int kGrid = 60;
-      int arg = 0;
-      double least = std::numeric_limits<double>::infinity();
-      for (int i = 0; i <= kGrid; ++i) {
-        const double value = mean_square(low + (high - low) * i / kGrid);
-        if (value < least) least = value, arg = i;
-      }
-      double a = low + (high - low) * std::max(arg - 1, 0) / kGrid;
-      double b = low + (high - low) * std::min(arg + 1, kGrid) / kGrid;
-      const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
-      for (int i = 0; i < 40; ++i) {
-        const double x1 = b - golden * (b - a), x2 = a + golden * (b - a);
-        if (mean_square(x1) < mean_square(x2)) b = x2;
-        else a = x1;
-      }
-      return 0.5 * (a + b);
-    };
     SurfaceFit fit;
-    mean_square(radius > 0.0 ? std::log(radius) : search());
+    mean_square(radius > 0.0 ? std::log(radius) : least_on_interval(mean_square, std::log(1e-3 * extent), std::log(1e2 * extent)));
     fit.surface = cylinder;
     fit.valid = true;
     fit_residuals(cylinder, data.points, data.weights, fit.rms, fit.max_error);
@@ -214,6 +217,71 @@ int fillets_between_planes(const std::vector<FitData>& points, const std::vector
       if (placed.valid && placed.spread < strip.spread) best = placed;
     }
     features[s].set_fit(best);
+    ++changed;
+  }
+  return changed;
+}
+
+int tori_between_planes_and_cylinders(const std::vector<FitData>& points,
+                                      const std::vector<std::pair<int, int>>& adjacent, const SharedAxisOptions& options,
+                                      std::vector<Feature>& features) {
+  std::vector<std::vector<int>> beside(features.size());
+  for (const auto& [a, b] : adjacent) {
+    beside[a].push_back(b);
+    beside[b].push_back(a);
+  }
+  int changed = 0;
+  for (size_t t = 0; t < features.size(); ++t) {
+    const Surface& torus = features[t].surface;
+    const FitData& data = points[t];
+    if (features[t].type != SurfaceType::Torus || data.points.rows() < 2 * parameter_count(SurfaceType::Torus)) continue;
+    const Surface *plane = nullptr, *cylinder = nullptr;
+    for (int n : beside[t]) {
+      const Surface& s = features[n].surface;
+      if (std::abs(s.axis.dot(torus.axis)) < std::cos(options.angle_tolerance)) continue;
+      if (features[n].type == SurfaceType::Plane && !plane) plane = &s;
+      if (features[n].type == SurfaceType::Cylinder && !cylinder &&
+          axial_coordinates(s.point, s.axis, torus.point).distance <= options.distance_tolerance)
+        cylinder = &s;
+    }
+    if (!plane || !cylinder) continue;
+    // About the cylinder's axis, on the sides of the plane and of the cylinder the fit put it.
+    const Eigen::Vector3d& o = cylinder->point;
+    const Eigen::Vector3d a = cylinder->axis;
+    const double foot = (plane->point - o).dot(a);
+    const double height = (torus.point - o).dot(a) - foot;
+    const double above = height >= 0.0 ? 1.0 : -1.0;
+    const double outside = torus.radius >= cylinder->radius ? 1.0 : -1.0;
+    // Only a torus that its own fit already puts against both (a torus where fillets meet at a
+    // corner may border a plane and a cylinder about its axis without touching them).
+    const double gap = options.distance_tolerance + 3.0 * features[t].spread;
+    if (std::abs(std::abs(height) - torus.minor) > gap || std::abs(std::abs(torus.radius - cylinder->radius) - torus.minor) > gap)
+      continue;
+    Surface tangent = torus;
+    tangent.axis = a;
+    auto mean_square = [&](double log_r) {
+      tangent.minor = std::exp(log_r);
+      tangent.point = o + (foot + above * tangent.minor) * a;
+      tangent.radius = cylinder->radius + outside * tangent.minor;
+      double rms, max_error;
+      fit_residuals(tangent, data.points, data.weights, rms, max_error);
+      return rms * rms;
+    };
+    // From a hundredth of the fitted tube radius to a hundred times it, inside the cylinder less
+    // than its radius.
+    const double largest = outside > 0.0 ? 1e2 * torus.minor : std::min(1e2 * torus.minor, 0.999 * cylinder->radius);
+    if (!(largest > 1e-2 * torus.minor)) continue;
+    mean_square(least_on_interval(mean_square, std::log(1e-2 * torus.minor), std::log(largest)));
+    SurfaceFit fit;
+    fit.surface = tangent;
+    fit.valid = true;
+    fit_residuals(tangent, data.points, data.weights, fit.rms, fit.max_error);
+    measure_spreads(data, fit);
+    const Feature& own = features[t];
+    if (fit.spread > options.residual_ratio * own.spread ||
+        fit.normal_spread > options.residual_ratio * own.normal_spread + options.normal_floor)
+      continue;
+    features[t].set_fit(fit);
     ++changed;
   }
   return changed;
