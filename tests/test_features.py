@@ -581,6 +581,20 @@ def test_fillets_at_the_foot_of_a_boss_touch_the_plane_and_the_cylinder():
                    for plane in layer.features if plane["type"] == "plane")
 
 
+@needs_freecad
+@shapes.needs_shared_data
+def test_chamfer_pieces_that_a_plane_fits_inside_are_cones():
+    """The benchmark's scan of occt_Pump_Nut: its two 60-degree chamfers are each cut into six
+    narrow pieces by the hexagon's flats, and the interior vertices of two pieces fit a plane as
+    well as a cone. Over all their vertices the chamfer's cone, as fitted to the other pieces, fits
+    them better than any plane: every piece is a cone, and only the part's eight planes are planes."""
+    m = shapes.benchmark_mesh("occt_Pump_Nut.step", "scan")
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    types = [f["type"] for f in layer.features]
+    assert types.count("plane") == 8
+    assert types.count("cone") == 12
+
+
 # ---------------------------------------------------------------- 5. freeform
 def wavy_top():
     """A 40 x 30 block whose top is a B-spline surface with 2 mm waves, on planar sides."""

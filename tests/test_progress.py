@@ -14,7 +14,7 @@ from idealize import Mesh
 
 # The step names in the order one idealize() + make_solid() run reports them.
 SEGMENT_STAGES = ["prepare", "check", "refine", "denoise", "curvature", "histograms", "thinning", "map_back"]
-FEATURE_STAGES = ["fit", "reassign", "split", "reassign", "merge", "reassign", "classify", "relations",
+FEATURE_STAGES = ["fit", "reassign", "split", "reassign", "merge", "reassign", "classify", "remerge", "relations",
                   "projection"]
 BREP_STAGES = ["topology", "vertices", "edges", "faces", "sewing", "checking", "triangulation", "deviation",
                "done"]

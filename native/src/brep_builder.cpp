@@ -13,6 +13,8 @@
 #include <BRepCheck_Result.hxx>
 #include <BRepGProp.hxx>
 #include <BRep_Builder.hxx>
+#include <BRepTools.hxx>
+#include <cstdlib>
 #include <BRep_Tool.hxx>
 #include <ElSLib.hxx>
 #include <GProp_GProps.hxx>
@@ -483,7 +485,8 @@ class BrepBuilder {
     since = now;
   }
   std::vector<int> merge_same_surfaces(const std::vector<int>& labels) const;
-  std::vector<int> dissolve_sampling_blends(const TriangleMesh& mesh, std::vector<int> labels) const;
+  std::vector<int> dissolve_sampling_blends(const TriangleMesh& mesh, const MeshTopology& topology,
+                                            std::vector<int> labels) const;
   void make_vertices(const MeshTopology& topology);
   TopoDS_Vertex vertex_at_corner(int mesh_vertex) const { return vertices_.at(mesh_vertex); }
   void make_edges(BrepResult& result);
@@ -528,10 +531,13 @@ std::vector<int> BrepBuilder::merge_same_surfaces(const std::vector<int>& labels
 
 // A scanner samples a sharp edge as a rounded strip about one sample spacing wide, which fits a
 // cylinder (or torus, sphere at corners) of about that radius: on a sampled (not exactly
-// tessellated) mesh, round features with a radius below two median edge lengths are such strips,
-// and their triangles go back to the features on either side (the thesis folds transition strips
-// into the neighbouring patches). An exact CAD tessellation keeps every feature.
-std::vector<int> BrepBuilder::dissolve_sampling_blends(const TriangleMesh& mesh, std::vector<int> labels) const {
+// tessellated) mesh, round features with a radius below two median edge lengths that are less
+// than one and a half wide (twice their area over their border's length) are such strips, and their
+// triangles go back to the features on either side (the thesis folds transition strips into the
+// neighbouring patches). A fillet of such a radius across several facets stays (occt_Pump_Nut's
+// scan: r 1 on edges of 0.6, two edges wide). An exact CAD tessellation keeps every feature.
+std::vector<int> BrepBuilder::dissolve_sampling_blends(const TriangleMesh& mesh, const MeshTopology& topology,
+                                                       std::vector<int> labels) const {
   const int features = static_cast<int>(surfaces_.size());
   std::vector<double> squared(features, 0.0), count(features, 0.0);
   std::vector<double> edges;
@@ -558,12 +564,26 @@ std::vector<int> BrepBuilder::dissolve_sampling_blends(const TriangleMesh& mesh,
   if (2 * exact >= fitted) return labels;
   std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
   const double spacing = edges[edges.size() / 2];
+  // Each feature's width: twice its area over the length of its border.
+  std::vector<double> area(features, 0.0), border(features, 0.0);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (labels[f] < 0) continue;
+    area[labels[f]] += 0.5 * (mesh.V.row(mesh.F(f, 1)) - mesh.V.row(mesh.F(f, 0)))
+                                 .cross(mesh.V.row(mesh.F(f, 2)) - mesh.V.row(mesh.F(f, 0)))
+                                 .norm();
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(f, c);
+      if (g < 0 || labels[g] != labels[f])
+        border[labels[f]] += (mesh.V.row(mesh.F(f, c)) - mesh.V.row(mesh.F(f, (c + 1) % 3))).norm();
+    }
+  }
   std::vector<char> strip(features, 0);
   for (int i = 0; i < features; ++i) {
     const Surface& s = surfaces_[i];
     const double radius = s.type == SurfaceType::Torus ? s.minor : s.radius;
+    const bool narrow = border[i] > 0.0 && 2.0 * area[i] / border[i] < 1.5 * spacing;
     strip[i] = (s.type == SurfaceType::Cylinder || s.type == SurfaceType::Torus || s.type == SurfaceType::Sphere) &&
-               radius < 2 * spacing;
+               radius < 2 * spacing && narrow;
   }
   for (int& l : labels) {
     if (l >= 0 && strip[l]) l = -1;
@@ -1031,7 +1051,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   progress_.step(0.05);
   const MeshTopology topology(clean);
   progress_.step(0.15);
-  const std::vector<int> merged = dissolve_sampling_blends(clean, merge_same_surfaces(clean_labels));
+  const std::vector<int> merged = dissolve_sampling_blends(clean, topology, merge_same_surfaces(clean_labels));
   progress_.step(0.25);
   const std::vector<int> face_feature = complete_face_features(clean, topology, merged, surfaces_);
   progress_.step(0.35);
@@ -1066,6 +1086,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   stage(result, "brep.faces", since);
 
   TopoDS_Shape shape = assemble(result, options);
+  if (std::getenv("IDL_BREPDUMP")) BRepTools::Write(shape, std::getenv("IDL_BREPDUMP"));
   stage(result, "brep.sew", since);
   const ProgressSpan checking = progress_.sub("checking", 0.9, 1.0);
   checking.step(0.0);

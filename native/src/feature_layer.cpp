@@ -125,7 +125,8 @@ PatchPoints face_points(const TriangleMesh& mesh, const int* faces, int count, s
 }
 
 // What the fits see of every patch (face_points, interior: the vertices only the patch touches,
-// and with `rim_rings` > 0 not on that many rings of faces along its rim either).
+// and with `rim_rings` > 0 not on that many rings of faces along its rim either; with `rim_rings`
+// < 0 every vertex of the patch's faces).
 std::vector<PatchPoints> patch_points(const TriangleMesh& mesh, const std::vector<int>& labels, int num_patches,
                                       int rim_rings = 0) {
   // Faces bucketed by patch (counting sort).
@@ -152,7 +153,7 @@ std::vector<PatchPoints> patch_points(const TriangleMesh& mesh, const std::vecto
   std::vector<PatchPoints> out(num_patches);
   for (int p = 0; p < num_patches; ++p)
     out[p] = face_points(mesh, faces.data() + offset[p], offset[p + 1] - offset[p], slot,
-                         [&](int v) { return shared[v] == p; });
+                         [&](int v) { return rim_rings >= 0 && shared[v] == p; });
   return out;
 }
 
@@ -1449,6 +1450,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       tori_between_planes_and_cylinders(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size())),
                                         adjacent, shared, layer.features);
     }
+    planes_on_curved_surfaces(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), -1), shared,
+                              layer.features);
     stage("edge_fillets");
   }
 

@@ -287,6 +287,40 @@ int tori_between_planes_and_cylinders(const std::vector<FitData>& points,
   return changed;
 }
 
+int planes_on_curved_surfaces(const std::vector<FitData>& points, const SharedAxisOptions& options,
+                              std::vector<Feature>& features) {
+  const std::vector<Feature> before = features;  // surfaces as fitted, not as taken over here
+  int changed = 0;
+  for (size_t p = 0; p < features.size(); ++p) {
+    const FitData& data = points[p];
+    if (before[p].type != SurfaceType::Plane || data.points.rows() < 2 * parameter_count(SurfaceType::Cone)) continue;
+    SurfaceFit plane = fit_surface(SurfaceType::Plane, data);
+    if (!plane.valid) continue;
+    measure_spreads(data, plane);
+    const Eigen::Vector3d centre = data.points.transpose() * data.weights / data.weights.sum();
+    SurfaceFit best;
+    for (size_t q = 0; q < features.size(); ++q) {
+      const Feature& other = before[q];
+      if (q == p || other.type == SurfaceType::Plane || other.type == SurfaceType::Freeform) continue;
+      // Only a surface that passes through the patch (cheap: at its centre).
+      if (std::abs(signed_distance(other.surface, centre)) > 3.0 * plane.rms + options.distance_tolerance) continue;
+      SurfaceFit fit;
+      fit.surface = other.surface;
+      fit.valid = true;
+      fit_residuals(fit.surface, data.points, data.weights, fit.rms, fit.max_error);
+      if (fit.rms < plane.rms && (!best.valid || fit.rms < best.rms)) best = fit;
+    }
+    if (!best.valid) continue;
+    measure_spreads(data, best);
+    if (best.normal_spread > options.residual_ratio * plane.normal_spread + options.normal_floor ||
+        turn_across(best.surface, data) <= options.angle_tolerance)
+      continue;
+    features[p].set_fit(best);
+    ++changed;
+  }
+  return changed;
+}
+
 int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOptions& options,
                           std::vector<Feature>& features) {
   std::vector<Axis> axes;

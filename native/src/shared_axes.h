@@ -61,4 +61,13 @@ int tori_between_planes_and_cylinders(const std::vector<FitData>& points,
                                       const std::vector<std::pair<int, int>>& adjacent, const SharedAxisOptions& options,
                                       std::vector<Feature>& features);
 
+// Pieces of a curved surface that fit a plane: a chamfer cone cut into six narrow pieces by a
+// hexagon's flats has pieces whose interior vertices a plane fits as well as the cone. Over all
+// the vertices of its faces, rim included, a plane that another feature's surface (as fitted, no
+// parameter free) fits better than the best plane, with normals that fit about as well, and that
+// turns across the patch by more than the angle tolerance, takes that surface. `points`: every
+// vertex of each feature's faces. Returns the number of features changed.
+int planes_on_curved_surfaces(const std::vector<FitData>& points, const SharedAxisOptions& options,
+                              std::vector<Feature>& features);
+
 }  // namespace idealize
