@@ -325,6 +325,21 @@ def test_small_fillets_stay_and_sampled_edges_go(name, variant, volume_error):
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_faces_at_odd_angles_keep_their_direction():
+    """The benchmark's scan of as_isolated_blends_test_12 has vertical faces at 25.4 and 4.8 degrees
+    from the part's axes, within the angle tolerance of its ideal directions: snapped, they no longer
+    fit their patches, and the fillets tangent to them moved with them, so that their edges crossed.
+    Those directions stay as fitted, the others snap: the solid closes, with all nine cylinders."""
+    m = shapes.benchmark_mesh("as_isolated_blends_test_12.stp", "scan")
+    truth = shapes.benchmark_truth("as_isolated_blends_test_12.stp")
+    solid = idealize.make_solid(idealize.idealize(Mesh(m.V, m.F)))
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types["cylinder"] == truth["surface_types"]["cylinder"]
+    assert abs(solid.volume / truth["volume"] - 1) < 5e-3
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_scan_of_a_domed_screw_head_gives_its_solid():
     """The benchmark's scan of occt_mal_vis: the flat outer zone of the head's torus fitted a large
     sphere as well, and stayed a face of its own that could not close. The torus takes it; the solid

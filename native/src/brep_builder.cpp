@@ -13,8 +13,6 @@
 #include <BRepCheck_Result.hxx>
 #include <BRepGProp.hxx>
 #include <BRep_Builder.hxx>
-#include <BRepTools.hxx>
-#include <cstdlib>
 #include <BRep_Tool.hxx>
 #include <ElSLib.hxx>
 #include <GProp_GProps.hxx>
@@ -1086,7 +1084,6 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   stage(result, "brep.faces", since);
 
   TopoDS_Shape shape = assemble(result, options);
-  if (std::getenv("IDL_BREPDUMP")) BRepTools::Write(shape, std::getenv("IDL_BREPDUMP"));
   stage(result, "brep.sew", since);
   const ProgressSpan checking = progress_.sub("checking", 0.9, 1.0);
   checking.step(0.0);

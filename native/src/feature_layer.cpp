@@ -1485,14 +1485,48 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       // An ideal surface must still describe its patch: where it fits clearly worse than the fitted
       // one (a direction that only looked ideal, radii that only looked equal), the fit stays.
       points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
-      for (size_t p = 0; p < layer.features.size(); ++p) {
-        Feature& f = layer.features[p];
-        if (f.type == SurfaceType::Freeform) continue;
+      auto misfit = [&](size_t p, const Surface& surface) {
         double rms, max_error;
-        fit_residuals(f.surface, points[p].points, points[p].weights, rms, max_error);
-        const double allowed = options.residual_ratio * fitted[p].rms + fitted[p].spread + floor;  // + one σ of noise
-        if (rms > allowed) f = fitted[p];
+        fit_residuals(surface, points[p].points, points[p].weights, rms, max_error);
+        return rms > options.residual_ratio * fitted[p].rms + fitted[p].spread + floor;  // + one σ of noise
+      };
+      // A direction that snapped to one of the part's ideal ones only by the angle tolerance (a face
+      // designed at 25° snaps to 30°) moves the features tangent to it too: once more, with the
+      // directions that alone (the fitted surface turned about its point nearest the patch's
+      // centre) do not fit their patch as fitted, and that turned by more than three times the
+      // part's median turn (a sculpted part's undulation tilts every fit a little), neither averaged
+      // with their parallels nor snapped. (On an exact tessellation any turn misfits; the fits
+      // that snapping spoils just stay, below.)
+      auto turn = [&](size_t p) {
+        return std::acos(std::min(1.0, std::abs(fitted[p].surface.axis.dot(layer.features[p].surface.axis))));
+      };
+      std::vector<double> turns;
+      for (size_t p = 0; p < layer.features.size(); ++p)
+        if (fitted[p].type != SurfaceType::Freeform && fitted[p].surface.has_direction()) turns.push_back(turn(p));
+      double typical_turn = 0.0;
+      if (!turns.empty()) {
+        std::nth_element(turns.begin(), turns.begin() + turns.size() / 2, turns.end());
+        typical_turn = turns[turns.size() / 2];
       }
+      for (size_t p = 0; p < layer.features.size() && !exact_mesh; ++p) {
+        if (fitted[p].type == SurfaceType::Freeform || !fitted[p].surface.has_direction() || turn(p) <= 3.0 * typical_turn)
+          continue;
+        // Turned about the point of its axis (or plane) nearest the patch's centre.
+        Surface turned = fitted[p].surface;
+        const Eigen::Vector3d centre = points[p].points.transpose() * points[p].weights / points[p].weights.sum();
+        const Eigen::Vector3d& a = turned.axis;
+        const double along = (centre - turned.point).dot(a);
+        if (turned.type == SurfaceType::Plane) turned.point = centre - along * a;
+        else if (turned.type != SurfaceType::Cone) turned.point += along * a;
+        turned.axis = layer.features[p].surface.axis;
+        if (misfit(p, turned)) ideal.unsnapped.push_back(static_cast<int>(p));
+      }
+      if (!ideal.unsnapped.empty()) {
+        layer.features = fitted;
+        idealize_features(layer.features, layer.relations, ideal);
+      }
+      for (size_t p = 0; p < layer.features.size(); ++p)
+        if (layer.features[p].type != SurfaceType::Freeform && misfit(p, layer.features[p].surface)) layer.features[p] = fitted[p];
       build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
                           options.radius_tolerance, layer.adjacency, layer.relations);  // the graph of the ideal surfaces
     }

@@ -35,17 +35,19 @@ struct Frame {
   Eigen::Vector3d x, y, z;
 };
 
-// Z: the normal of the largest plane; X: the largest feature direction orthogonal to it.
-bool part_frame(const std::vector<Feature>& features, double sin_tolerance, Frame& frame) {
+// Z: the normal of the largest plane; X: the largest feature direction orthogonal to it; neither
+// from the features whose directions stay as fitted (`unsnapped`).
+bool part_frame(const std::vector<Feature>& features, const std::vector<char>& unsnapped, double sin_tolerance,
+                Frame& frame) {
   int plane = -1;
   for (const Feature& f : features)
-    if (f.type == SurfaceType::Plane && (plane < 0 || f.area > features[plane].area)) plane = f.id;
+    if (f.type == SurfaceType::Plane && !unsnapped[f.id] && (plane < 0 || f.area > features[plane].area)) plane = f.id;
   if (plane < 0) return false;
   frame.z = features[plane].surface.axis;
   int second = -1;
   for (const Feature& f : features)
-    if (analytic(f) && f.surface.has_direction() && std::abs(f.surface.axis.dot(frame.z)) <= sin_tolerance &&
-        (second < 0 || f.area > features[second].area))
+    if (analytic(f) && f.surface.has_direction() && !unsnapped[f.id] &&
+        std::abs(f.surface.axis.dot(frame.z)) <= sin_tolerance && (second < 0 || f.area > features[second].area))
       second = f.id;
   if (second >= 0) {
     const Eigen::Vector3d d = features[second].surface.axis;
@@ -105,17 +107,25 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
   const double cos_tolerance = std::cos(angle);
 
   // 1. Directions: parallel groups share their mean direction, then every direction snaps to the
-  // part's ideal directions.
+  // part's ideal directions; those that must stay as fitted (options.unsnapped) do neither.
+  std::vector<char> unsnapped(features.size(), 0);
+  for (int id : options.unsnapped)
+    if (id >= 0 && id < static_cast<int>(features.size())) unsnapped[id] = 1;
   for (const FeatureRelation& r : relations)
     if (r.kind == "parallel") {
-      const Eigen::Vector3d d = mean_direction(r.features, features);
-      for (int m : r.features) features[m].surface.axis = aligned(d, features[m].surface.axis);
+      std::vector<int> group;
+      for (int m : r.features)
+        if (!unsnapped[m]) group.push_back(m);
+      if (group.empty()) continue;
+      const Eigen::Vector3d d = mean_direction(group, features);
+      for (int m : group) features[m].surface.axis = aligned(d, features[m].surface.axis);
     }
   Frame frame;
-  if (options.snap_to_frame && part_frame(features, std::sin(angle), frame)) {
+  if (options.snap_to_frame && part_frame(features, unsnapped, std::sin(angle), frame)) {
     const std::vector<Eigen::Vector3d> ideals = ideal_directions(frame);
     for (Feature& f : features)
-      if (analytic(f) && f.surface.has_direction()) f.surface.axis = snapped(f.surface.axis, ideals, cos_tolerance);
+      if (analytic(f) && f.surface.has_direction() && !unsnapped[f.id])
+        f.surface.axis = snapped(f.surface.axis, ideals, cos_tolerance);
   }
 
   for (const FeatureRelation& r : relations) {

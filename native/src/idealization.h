@@ -15,12 +15,15 @@
 
 #include "feature_layer.h"
 
+#include <vector>
+
 namespace idealize {
 
 struct IdealizationOptions {
   double angle_tolerance_degrees = 5.0;  // the thesis's alignment tolerance
   double distance_tolerance = 0.0;       // model units; must be set (the layer's tolerance)
   bool snap_to_frame = true;             // snap directions to the part's ideal directions
+  std::vector<int> unsnapped;            // features (ids) whose directions stay as fitted
 };
 
 // Idealizes `features` in place using `relations` (from build_feature_graph). Freeform features
