@@ -564,11 +564,10 @@ std::vector<int> BrepBuilder::dissolve_sampling_blends(const TriangleMesh& mesh,
   const double spacing = edges[edges.size() / 2];
   // Each feature's width: twice its area over the length of its border.
   std::vector<double> area(features, 0.0), border(features, 0.0);
+  const Eigen::VectorXd face_area = face_areas(mesh);
   for (int f = 0; f < mesh.num_faces(); ++f) {
     if (labels[f] < 0) continue;
-    area[labels[f]] += 0.5 * (mesh.V.row(mesh.F(f, 1)) - mesh.V.row(mesh.F(f, 0)))
-                                 .cross(mesh.V.row(mesh.F(f, 2)) - mesh.V.row(mesh.F(f, 0)))
-                                 .norm();
+    area[labels[f]] += face_area[f];
     for (int c = 0; c < 3; ++c) {
       const int g = topology.face_neighbor(f, c);
       if (g < 0 || labels[g] != labels[f])

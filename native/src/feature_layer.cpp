@@ -298,6 +298,14 @@ std::map<std::pair<int, int>, double> boundary_turns(const TriangleMesh& mesh, c
   return turns;
 }
 
+// The pairs of patches (a, b) with a < b that share a mesh edge.
+std::vector<std::pair<int, int>> adjacent_pairs(const TriangleMesh& mesh, const MeshTopology& topology,
+                                                const std::vector<int>& labels) {
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& [pair, turn] : boundary_turns(mesh, topology, labels)) pairs.push_back(pair);
+  return pairs;
+}
+
 
 // Distinct points of `data` (pieces share their rim vertices).
 int distinct_points(const PatchPoints& data) {
@@ -1379,9 +1387,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     shared.normal_floor = options.normal_floor_degrees * M_PI / 180.0;
     const std::vector<PatchPoints> feature_points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
     fit_about_shared_axes(feature_points, shared, layer.features);
-    std::vector<std::pair<int, int>> adjacent;  // the pairs of features that share a mesh edge
-    for (const auto& [pair, turn] : boundary_turns(mesh, topology, layer.labels)) adjacent.push_back(pair);
-    fillets_between_planes(feature_points, adjacent, shared, layer.features);
+    fillets_between_planes(feature_points, adjacent_pairs(mesh, topology, layer.labels), shared, layer.features);
     // Fillets too narrow for a patch of their own, which the features beside them took; cylinders and
     // planes that a torus took with it. The new features keep the surface the fit of the edge's
     // band or the torus's profile fixed, the others are refitted without the faces they gave.
@@ -1403,9 +1409,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         SurfaceFit fit;
         if (p < existing) fit = fit_surface(f.type, now[p], options.fit, &f.surface);
         if (!fit.valid) {
-          fit.surface = f.surface;
-          fit.valid = true;
-          fit_residuals(fit.surface, now[p].points, now[p].weights, fit.rms, fit.max_error);
+          fit = fit_of(f.surface, now[p]);
           measure_spreads(now[p], fit);
         }
         f.set_fit(fit);
@@ -1433,7 +1437,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         if (a.type == SurfaceType::Cone) return std::abs(a.surface.half_angle - b.surface.half_angle) <= angle_tolerance;
         return a.type == SurfaceType::Plane || equal_radii(a, b, layer.distance_tolerance, options.radius_tolerance);
       };
-      for (const auto& [pair, turn] : boundary_turns(mesh, topology, layer.labels))
+      for (const auto& pair : adjacent_pairs(mesh, topology, layer.labels))
         if ((touched[pair.first] && touched[pair.second]) || !alike(layer.features[pair.first], layer.features[pair.second]))
           apart.insert(pair);
       const std::vector<PatchPoints> now = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
@@ -1444,12 +1448,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       }
     }
     // The tori that the edge stages found or left, now that their neighbours are settled.
-    {
-      std::vector<std::pair<int, int>> adjacent;
-      for (const auto& [pair, turn] : boundary_turns(mesh, topology, layer.labels)) adjacent.push_back(pair);
-      tori_between_planes_and_cylinders(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size())),
-                                        adjacent, shared, layer.features);
-    }
+    tori_between_planes_and_cylinders(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size())),
+                                      adjacent_pairs(mesh, topology, layer.labels), shared, layer.features);
     planes_on_curved_surfaces(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), -1), shared,
                               layer.features);
     stage("edge_fillets");

@@ -119,11 +119,8 @@ SurfaceFit tangent_cylinder(const FitData& data, const Eigen::Vector3d& n1, cons
       return rms * rms;
     };
     // From a thousandth of the strip's size to a hundred times it (a shallow blend of a wide radius).
-    SurfaceFit fit;
     mean_square(radius > 0.0 ? std::log(radius) : least_on_interval(mean_square, std::log(1e-3 * extent), std::log(1e2 * extent)));
-    fit.surface = cylinder;
-    fit.valid = true;
-    fit_residuals(cylinder, data.points, data.weights, fit.rms, fit.max_error);
+    const SurfaceFit fit = fit_of(cylinder, data);
     if (!best.valid || fit.rms < best.rms) best = fit;
   }
   return best;
@@ -169,9 +166,7 @@ int fillets_between_planes(const std::vector<FitData>& points, const std::vector
   for (size_t s = 0; s < features.size(); ++s) {
     const FitData& data = points[s];
     if (before[s].type != SurfaceType::Plane || data.points.rows() < 2 * parameter_count(SurfaceType::Cylinder)) continue;
-    SurfaceFit strip;
-    strip.surface = before[s].surface;
-    fit_residuals(strip.surface, data.points, data.weights, strip.rms, strip.max_error);
+    SurfaceFit strip = fit_of(before[s].surface, data);
     const Eigen::Vector3d n = outward_normal(strip.surface, data);
     SurfaceFit best;
     const std::vector<int>& beside = planes_beside[s];
@@ -272,10 +267,7 @@ int tori_between_planes_and_cylinders(const std::vector<FitData>& points,
     const double largest = outside > 0.0 ? 1e2 * torus.minor : std::min(1e2 * torus.minor, 0.999 * cylinder->radius);
     if (!(largest > 1e-2 * torus.minor)) continue;
     mean_square(least_on_interval(mean_square, std::log(1e-2 * torus.minor), std::log(largest)));
-    SurfaceFit fit;
-    fit.surface = tangent;
-    fit.valid = true;
-    fit_residuals(tangent, data.points, data.weights, fit.rms, fit.max_error);
+    SurfaceFit fit = fit_of(tangent, data);
     measure_spreads(data, fit);
     const Feature& own = features[t];
     if (fit.spread > options.residual_ratio * own.spread ||
@@ -304,10 +296,7 @@ int planes_on_curved_surfaces(const std::vector<FitData>& points, const SharedAx
       if (q == p || other.type == SurfaceType::Plane || other.type == SurfaceType::Freeform) continue;
       // Only a surface that passes through the patch (cheap: at its centre).
       if (std::abs(signed_distance(other.surface, centre)) > 3.0 * plane.rms + options.distance_tolerance) continue;
-      SurfaceFit fit;
-      fit.surface = other.surface;
-      fit.valid = true;
-      fit_residuals(fit.surface, data.points, data.weights, fit.rms, fit.max_error);
+      const SurfaceFit fit = fit_of(other.surface, data);
       if (fit.rms < plane.rms && (!best.valid || fit.rms < best.rms)) best = fit;
     }
     if (!best.valid) continue;

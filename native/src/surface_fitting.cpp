@@ -336,6 +336,14 @@ Surface to_world(Surface s, const Eigen::Vector3d& centre, double scale) {
 
 }  // namespace
 
+SurfaceFit fit_of(const Surface& surface, const FitData& data) {
+  SurfaceFit fit;
+  fit.surface = surface;
+  fit.valid = true;
+  fit_residuals(surface, data.points, data.weights, fit.rms, fit.max_error);
+  return fit;
+}
+
 void fit_residuals(const Surface& surface, const MatrixX3d& points, const Eigen::VectorXd& weights,
                    double& rms, double& max_error) {
   double sum = 0.0, total = 0.0;

@@ -77,4 +77,8 @@ double weighted_median(std::vector<std::pair<double, double>> values);
 void fit_residuals(const Surface& surface, const MatrixX3d& points, const Eigen::VectorXd& weights,
                    double& rms, double& max_error);
 
+// A given surface as a fit of `data`: valid, with its RMS and maximum distance (the spreads are
+// left to measure_spreads).
+SurfaceFit fit_of(const Surface& surface, const FitData& data);
+
 }  // namespace idealize
