@@ -104,6 +104,32 @@ def corner_blend_box():
     return box.makeFillet(2.5, [e for e in box.Edges if any((v.Point - corner).Length < 1e-9 for v in e.Vertexes)])
 
 
+def rounded_knob():
+    """A turned knob, revolved about Z from its profile: a disc (r 20) under a 45° cone up to a flat
+    top, its rims rounded: r 2 at the base and r 3 between disc and cone (tori that touch the disc on
+    their outer equator), r 1.5 at the top (a torus between the cone and the top). 7 faces."""
+    FreeCAD, Part, _ = freecad()
+    V = FreeCAD.Vector
+    s = np.sqrt(0.5)
+
+    def arc(centre, radius, start, end):  # the shorter arc about centre (x, z) between two angles
+        middle = 0.5 * (start + end)
+        return Part.Arc(*[V(centre[0] + radius * np.cos(t), 0, centre[1] + radius * np.sin(t)) for t in (start, middle, end)])
+
+    middle_z = 13 - 3 / s  # the r 3 fillet's centre: 3 from the disc (x 20) and from the cone (x + z = 30)
+    top_x = 13.5 - 1.5 / s  # the r 1.5 fillet's centre: 1.5 from the top (z 18) and from the cone
+    edges = [Part.LineSegment(V(0, 0, 0), V(18, 0, 0)).toShape(),
+             arc((18, 2), 2, -np.pi / 2, 0).toShape(),
+             Part.LineSegment(V(20, 0, 2), V(20, 0, middle_z)).toShape(),
+             arc((17, middle_z), 3, 0, np.pi / 4).toShape(),
+             Part.LineSegment(V(17 + 3 * s, 0, middle_z + 3 * s), V(top_x + 1.5 * s, 0, 16.5 + 1.5 * s)).toShape(),
+             arc((top_x, 16.5), 1.5, np.pi / 4, np.pi / 2).toShape(),
+             Part.LineSegment(V(top_x, 0, 18), V(0, 0, 18)).toShape(),
+             Part.LineSegment(V(0, 0, 18), V(0, 0, 0)).toShape()]
+    profile = Part.Face(Part.Wire(edges))
+    return Part.Solid(profile.revolve(V(0, 0, 0), V(0, 0, 1), 360))
+
+
 def hexagon_nut(across_flats=20.0, height=8.0, bore=5.0):
     """A hexagon nut chamfered at 30° on both ends: six flats, two end faces, a bore and twelve pieces
     of the two chamfer cones (one at each corner of each end), all about the Z axis."""

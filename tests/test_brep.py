@@ -388,6 +388,39 @@ def test_noisy_scan_of_a_corner_ball_gives_its_solid():
 
 
 @needs_freecad
+@pytest.mark.parametrize("seed", [0, 1])
+def test_noisy_scan_of_a_turned_knob_gives_its_solid(seed):
+    """A turned knob, scanned: rim fillets that touch the disc on their torus's outer equator (its v
+    seam, where healing left the bands unorientable), a fillet between the disc and a 45° cone (a
+    fillet between coaxial surfaces, which the two took half each), and the cone between two tori
+    (two bands whose seams differed, so that their common circle was cut differently on each side and
+    could not be sewn). The solid has the knob's seven faces and its volume."""
+    part = shapes.rounded_knob()
+    V, F, _, diag = shapes.uniform_remesh(part)
+    V = shapes.normal_noise(V, F, diag, seed)
+    solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))
+    assert solid.solid and solid.valid and solid.part_shape().isValid(), solid.problems
+    assert solid.surface_types == {"plane": 2, "cylinder": 1, "cone": 1, "torus": 3}
+    assert abs(solid.volume / part.Volume - 1) < 5e-3
+
+
+@needs_freecad
+@shapes.needs_shared_data
+def test_scan_of_coaxial_blends_closes():
+    """The benchmark's scan of as_customblend_05: tori and a cone between cylinders and planes about
+    one axis, 10 m from the origin. Its rim tori's bands and the cone between two tori were invalid
+    faces; the cone meets its fillet in two crossings 0.6 mm apart (their fits touch
+    only nearly), whose fitted edge left both surfaces. The solid closes with every feature's face (the
+    part's fillet of r 0.52, two facets wide at this noise, is not found)."""
+    m = shapes.benchmark_mesh("as_customblend_05.step", "scan")
+    layer = idealize.idealize(Mesh(m.V, m.F))
+    solid = idealize.make_solid(layer)
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.faces == len(layer.features)
+    assert solid.surface_types["torus"] == 4 and solid.surface_types["cone"] == 1
+
+
+@needs_freecad
 @shapes.needs_shared_data
 def test_faces_of_a_shell_that_does_not_close_pass_the_boolean_checks():
     """The benchmark's scan of as_circular_blend_01 does not close. Some of its faces were bounded by

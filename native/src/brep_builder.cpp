@@ -89,7 +89,21 @@ Vec3 seam_direction(const Vec3& axis, const Vec3& mean_radial) {
   return x.normalized();
 }
 
-Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& points) {
+// A unit vector orthogonal to `axis` that depends on the axis line only (not on its sense): the
+// seam of every face that goes all round an axis. Coaxial bands then share their seams; healing
+// splits each band's circles where its own seam crosses them, and the circle between two bands
+// with different seams is cut differently on each side: sewing leaves it free (a cone between two
+// tori on as_customblend_05's scan).
+Vec3 common_seam_direction(const Vec3& axis) {
+  Eigen::Index least_aligned;
+  axis.cwiseAbs().minCoeff(&least_aligned);
+  const Vec3 unit = Vec3::Unit(least_aligned);
+  return (unit - unit.dot(axis) * axis).normalized();
+}
+
+// The surface of feature `s` for a face through `points`; `all_round`: the face goes all round its
+// axis (one of its loops is a closed chain).
+Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& points, bool all_round) {
   Vec3 radial = Vec3::Zero();
   double height = 0.0;
   for (const Vec3& p : points) {
@@ -100,6 +114,9 @@ Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& poi
     if (r.norm() > 0) radial += r.normalized();
   }
   if (!points.empty()) height /= static_cast<double>(points.size());
+  const Vec3 seam = !s.has_direction() ? Vec3::Zero()
+                    : all_round          ? common_seam_direction(s.axis)
+                                         : seam_direction(s.axis, radial);
   switch (s.type) {
     case SurfaceType::Plane: {
       Vec3 x, y;
@@ -107,13 +124,11 @@ Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& poi
       return new Geom_Plane(gp_Ax3(to_pnt(s.point), to_dir(s.axis), to_dir(x)));
     }
     case SurfaceType::Cylinder:
-      return new Geom_CylindricalSurface(gp_Ax3(to_pnt(s.point), to_dir(s.axis), to_dir(seam_direction(s.axis, radial))),
-                                         s.radius);
+      return new Geom_CylindricalSurface(gp_Ax3(to_pnt(s.point), to_dir(s.axis), to_dir(seam)), s.radius);
     case SurfaceType::Cone: {
       // OCCT places a cone by a reference circle: take it at the face's mean height.
       const double h = std::max(height, 1e-6);
-      return new Geom_ConicalSurface(gp_Ax3(to_pnt(s.point + h * s.axis), to_dir(s.axis),
-                                            to_dir(seam_direction(s.axis, radial))),
+      return new Geom_ConicalSurface(gp_Ax3(to_pnt(s.point + h * s.axis), to_dir(s.axis), to_dir(seam)),
                                      s.half_angle, h * std::tan(s.half_angle));
     }
     case SurfaceType::Sphere: {
@@ -126,8 +141,7 @@ Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& poi
       return new Geom_SphericalSurface(gp_Ax3(to_pnt(s.point), to_dir(z), to_dir(x)), s.radius);
     }
     case SurfaceType::Torus:
-      return new Geom_ToroidalSurface(gp_Ax3(to_pnt(s.point), to_dir(s.axis), to_dir(seam_direction(s.axis, radial))),
-                                      s.radius, s.minor);
+      return new Geom_ToroidalSurface(gp_Ax3(to_pnt(s.point), to_dir(s.axis), to_dir(seam)), s.radius, s.minor);
     case SurfaceType::Freeform:
       break;
   }
@@ -163,7 +177,10 @@ Primitive2 circle2(const Vec2& c, double r) { return {true, c, Vec2::UnitX(), r}
 
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
-// Intersection points; tangent primitives (within `tol`) meet in their point of contact.
+// Intersection points; primitives that touch within `tol` (missing each other or crossing with a
+// sagitta below it) meet in one point of contact: nearly tangent surfaces that idealization did not
+// make tangent (a fillet whose patch took some of the cone beside it) get the circle where they
+// touch, not one of two close crossings that the mesh's boundary does not follow.
 std::vector<Vec2> intersect(const Primitive2& a, const Primitive2& b, double tol) {
   if (a.circle && !b.circle) return intersect(b, a, tol);
   if (!a.circle && !b.circle) {
@@ -176,7 +193,7 @@ std::vector<Vec2> intersect(const Primitive2& a, const Primitive2& b, double tol
     const Vec2 foot = a.p + (b.p - a.p).dot(a.d) * a.d;
     const double dist = (b.p - foot).norm();
     if (dist > b.r + tol) return {};
-    if (dist >= b.r - 1e-9 * std::max(1.0, b.r)) return {foot};
+    if (dist >= b.r - tol) return {foot};
     const double h = std::sqrt(b.r * b.r - dist * dist);
     return {foot + h * a.d, foot - h * a.d};
   }
@@ -186,7 +203,8 @@ std::vector<Vec2> intersect(const Primitive2& a, const Primitive2& b, double tol
   const Vec2 u = between / d;
   const double along = (a.r * a.r - b.r * b.r + d * d) / (2 * d);
   const double h2 = a.r * a.r - along * along;
-  if (h2 <= 1e-18 * std::max(1.0, a.r * a.r)) return {a.p + along * u};
+  const bool touching = std::abs(d - (a.r + b.r)) <= tol || std::abs(d - std::abs(a.r - b.r)) <= tol;
+  if (touching || h2 <= 1e-18 * std::max(1.0, a.r * a.r)) return {a.p + along * u};
   const double h = std::sqrt(h2);
   const Vec2 n(-u.y(), u.x());
   return {a.p + along * u + h * n, a.p + along * u - h * n};
@@ -979,6 +997,11 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
       fix.SetPrecision(Precision::Confusion());
       fix.SetMaxTolerance(tol_);
       fix.Perform();
+      // The seam that healing adds to a band on a torus comes out flagged same-parameter when
+      // its curves are not (BRepCheck_InvalidSameParameterFlag): set them so.
+      ShapeFix_Edge same_parameter;
+      for (TopExp_Explorer e(fix.Face(), TopAbs_EDGE); e.More(); e.Next())
+        same_parameter.FixSameParameter(TopoDS::Edge(e.Current()));
       sewing.Add(fix.Face());
     } catch (const Standard_Failure& failure) {
       result.problems.push_back({topo_.region_feature[face_region_[i]], occt_message(failure, "its face could not be healed")});
@@ -1073,7 +1096,10 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   region_surfaces_.resize(regions);
   for (int r = 0; r < regions; ++r) {
     for (const Vec3& p : region_points[r]) region_centroid_[r] += p / static_cast<double>(region_points[r].size());
-    region_surfaces_[r] = make_surface(surfaces_[topo_.region_feature[r]], region_points[r]);
+    const bool all_round = std::any_of(topo_.region_loops[r].begin(), topo_.region_loops[r].end(), [&](const auto& loop) {
+      return loop.size() == 1 && topo_.chains[loop.front().chain].closed;
+    });
+    region_surfaces_[r] = make_surface(surfaces_[topo_.region_feature[r]], region_points[r], all_round);
   }
   progress_.sub("vertices", 0.0, 1.0).step(0.5);
   make_vertices(topology);

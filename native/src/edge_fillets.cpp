@@ -81,9 +81,12 @@ std::optional<ProfileLine> profile_line(const Surface& s, const Section& section
   }
 }
 
-// The section of two adjacent features meeting at an angle, or none: two planes, or a plane across
-// the axis of a cylinder or cone (their axis; the plane's normal within the angle tolerance of it).
-std::optional<Section> section_between(const Surface& a, const Surface& b, double angle_tolerance) {
+// The section of two adjacent features meeting at an angle, or none: two planes; a plane across the
+// axis of a cylinder or cone (their axis; the plane's normal within the angle tolerance of it); a
+// cone and a cylinder or cone about one axis (within the angle tolerance, and the second's axis
+// passing within `off_axis` of the first's).
+std::optional<Section> section_between(const Surface& a, const Surface& b, double angle_tolerance, double off_axis) {
+  auto revolved = [](const Surface& s) { return s.type == SurfaceType::Cylinder || s.type == SurfaceType::Cone; };
   Section section;
   if (a.type == SurfaceType::Plane && b.type == SurfaceType::Plane) {
     const Eigen::Vector3d direction = a.axis.cross(b.axis);
@@ -94,10 +97,17 @@ std::optional<Section> section_between(const Surface& a, const Surface& b, doubl
     section.origin = rows.colPivHouseholderQr().solve(Eigen::Vector3d(a.axis.dot(a.point), b.axis.dot(b.point), 0.0));
   } else if (a.type == SurfaceType::Plane || b.type == SurfaceType::Plane) {
     const Surface& round = a.type == SurfaceType::Plane ? b : a;
-    if (round.type != SurfaceType::Cylinder && round.type != SurfaceType::Cone) return std::nullopt;
+    if (!revolved(round)) return std::nullopt;
     section.around_axis = true;
     section.direction = round.axis;
     section.origin = round.point;
+  } else if (revolved(a) && revolved(b) && (a.type == SurfaceType::Cone || b.type == SurfaceType::Cone)) {
+    if (std::abs(a.axis.dot(b.axis)) < std::cos(angle_tolerance) ||
+        axial_coordinates(a.point, a.axis, b.point).distance > off_axis)
+      return std::nullopt;
+    section.around_axis = true;
+    section.direction = a.axis;
+    section.origin = a.point;
   } else {
     return std::nullopt;
   }
@@ -585,7 +595,7 @@ std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topo
   for (const auto& [pair, border] : borders) {
     const auto [a, b] = pair;
     const Surface &sa = features[a].surface, &sb = features[b].surface;
-    const std::optional<Section> section = section_between(sa, sb, options.angle_tolerance);
+    const std::optional<Section> section = section_between(sa, sb, options.angle_tolerance, edge);
     if (!section) continue;
     const std::optional<ProfileLine> line_a = profile_line(sa, *section, options.angle_tolerance);
     const std::optional<ProfileLine> line_b = profile_line(sb, *section, options.angle_tolerance);

@@ -1395,12 +1395,16 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     edges.angle_tolerance = shared.angle_tolerance;
     edges.residual_ratio = options.residual_ratio;
     edges.radius_tolerance = options.radius_tolerance;
-    std::vector<char> touched;  // features the finders made or changed
+    // Features that a finder split into pieces (a fillet found on an edge takes faces from two
+    // features that meet at an angle, which never merge again anyway: a cone that gave a fillet at
+    // each end stays free to rejoin its other piece).
+    std::vector<char> touched;
     for (auto find : {round_edges, split_tangent_continuations, split_cornered_tori, split_coaxial_steps}) {
       const size_t existing = layer.features.size();
       const std::vector<char> changed = find(mesh, topology, edges, layer.features, layer.labels);
       touched.resize(changed.size(), 0);
-      for (size_t p = 0; p < changed.size(); ++p) touched[p] |= changed[p];
+      if (find != round_edges)
+        for (size_t p = 0; p < changed.size(); ++p) touched[p] |= changed[p];
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) continue;
       const std::vector<PatchPoints> now = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
       for (size_t p = 0; p < layer.features.size(); ++p) {
