@@ -4,10 +4,11 @@
 // curvature histogram sees a patch there, and the two features take half of it each (on the NIST
 // test parts, most fillets of radius 0.8-1.5 edge lengths). Where two planes meet, a plane meets a
 // cylinder or cone across its axis, or a cone meets a cylinder or cone about its axis, the two
-// surfaces are lines in a cross-section (across the planes' line; through the axis). There the vertices near the edge fit either the sharp wedge or
-// the wedge rounded by the circle tangent to both lines, which adds one parameter, its radius (J.
-// S.-S. Chen, "Hybrid CAD modeler", 4.3: a fillet is defined by the surfaces it is tangent to and its
-// radius): a cylinder along the planes' line, or a torus about the axis. The rounding is kept
+// surfaces are lines in a cross-section (across the planes' line; through the axis). There the
+// vertices near the edge fit either the sharp wedge or the wedge rounded by the circle tangent to
+// both lines, which adds one parameter, its radius (J. S.-S. Chen, "Hybrid CAD modeler", 4.3: a
+// fillet is defined by the surfaces it is tangent to and its radius): a cylinder along the planes'
+// line, or a torus about the axis. The rounding is kept
 // where the Bayesian information criterion prefers it (counting correlated residuals, a sculpted
 // part's, as fewer independent ones), the band fits it about as well as the planes fit their own
 // patches, and its arc is longer than a mesh edge (a rounding that narrow is what uniform
@@ -43,8 +44,9 @@ struct EdgeFilletOptions {
 };
 
 // Finds the rounded edges between adjacent features of a noisy mesh (two planes; a plane and a
-// cylinder or cone across its axis; a cone and a coaxial cylinder or cone) and appends a cylinder or torus feature for each (type, surface;
-// its residuals are left to the caller), relabelling the faces between its tangent lines. labels
+// cylinder or cone across its axis; a cone and a coaxial cylinder or cone) and appends a cylinder or
+// torus feature for each (type, surface; its residuals are left to the caller), relabelling the
+// faces between its tangent lines. labels
 // (#F): feature id per face (-1: none); features: indexed by id, with their spreads. Returns, per
 // feature after the call, whether it changed (a new fillet, or a feature that gave it faces).
 std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topology,

@@ -545,9 +545,9 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     // On a noisy mesh, two cylinders of one radius whose axes turn may be sectors of another surface
     // that the histogram cut up: a torus's tube (a wide blend whose mean curvature passes through
     // zero), a slender cone. Their union is identified afresh.
-    const bool tube = !exact && same_type && fa.type == SurfaceType::Cylinder &&
-                      std::abs(fa.surface.axis.dot(fb.surface.axis)) < std::cos(angle_tolerance) &&
-                      equal_radii(fa, fb, tolerance, options.radius_tolerance);
+    const bool sectors = !exact && same_type && fa.type == SurfaceType::Cylinder &&
+                         std::abs(fa.surface.axis.dot(fb.surface.axis)) < std::cos(angle_tolerance) &&
+                         equal_radii(fa, fb, tolerance, options.radius_tolerance);
     // Two planes that meet at less than the angle tolerance without a crease (no facet turns more
     // across their border than inside either) are one plane where it explains each part (below: not
     // a step): a sculpted face's undulation bends it by more than its pieces' fits allow a merge,
@@ -594,7 +594,7 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     // the bands of a coarse torus between its parallels are cones or spheres each.
     const bool one_curved = exact && (fa.type != SurfaceType::Plane || fb.type != SurfaceType::Plane) &&
                             fa.type != SurfaceType::Freeform && fb.type != SurfaceType::Freeform;
-    if (!ok && ((a_small && b_small) || one_curved || tube)) {
+    if (!ok && ((a_small && b_small) || one_curved || sectors)) {
       merged = identify_points(both, larger.curvature);
       ok = accepted(merged);
     }
