@@ -1432,6 +1432,9 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     // merges now where one surface fits both as merging requires. Only alike pieces are tried (one
     // type, parallel, radii that relations would take for equal), and not two that the finders
     // above just split apart.
+    // The points and neighbours of the features, for the remerge and the tangent tori after it.
+    std::vector<PatchPoints> settled = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+    std::vector<std::pair<int, int>> beside = adjacent_pairs(mesh, topology, layer.labels);
     {
       std::set<std::pair<int, int>> apart;
       touched.resize(layer.features.size(), 0);
@@ -1447,19 +1450,19 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         if (a.type == SurfaceType::Cone) return std::abs(a.surface.half_angle - b.surface.half_angle) <= angle_tolerance;
         return a.type == SurfaceType::Plane || equal_radii(a, b, layer.distance_tolerance, options.radius_tolerance);
       };
-      for (const auto& pair : adjacent_pairs(mesh, topology, layer.labels))
+      for (const auto& pair : beside)
         if ((touched[pair.first] && touched[pair.second]) || !alike(layer.features[pair.first], layer.features[pair.second]))
           apart.insert(pair);
-      const std::vector<PatchPoints> now = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
-      if (merge_patches(mesh, topology, now, identify_points, options, layer.distance_tolerance, false, exact_distance, noise,
-                        layer.features, layer.labels, apart, progress.sub("remerge", 0.98, 0.98))) {
+      if (merge_patches(mesh, topology, settled, identify_points, options, layer.distance_tolerance, false, exact_distance,
+                        noise, layer.features, layer.labels, apart, progress.sub("remerge", 0.98, 0.98))) {
         compact_features(layer.labels, layer.features);
         count_faces(area, layer.labels, layer.features);
+        settled = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+        beside = adjacent_pairs(mesh, topology, layer.labels);
       }
     }
     // The tori that the edge stages found or left, now that their neighbours are settled.
-    tori_between_planes_and_cylinders(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size())),
-                                      adjacent_pairs(mesh, topology, layer.labels), shared, layer.features);
+    tori_between_planes_and_cylinders(settled, beside, shared, layer.features);
     planes_on_curved_surfaces(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), -1), shared,
                               layer.features);
     stage("edge_fillets");

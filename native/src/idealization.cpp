@@ -86,6 +86,12 @@ Eigen::Vector3d snapped(const Eigen::Vector3d& d, const std::vector<Eigen::Vecto
 
 double& tube_radius(Feature& f) { return f.type == SurfaceType::Torus ? f.surface.minor : f.surface.radius; }
 
+// How far `point` moves along `plane`'s normal to lie `distance` from it, on the side it is on now.
+double to_distance_from(const Surface& plane, const Eigen::Vector3d& point, double distance) {
+  const double height = (point - plane.point).dot(plane.axis);
+  return (height >= 0.0 ? 1.0 : -1.0) * distance - height;
+}
+
 // The surfaces of the features of `type` in a tangent relation with feature `id`.
 std::vector<const Surface*> tangent_surfaces(int id, SurfaceType type, const std::vector<FeatureRelation>& relations,
                                              const std::vector<Feature>& features) {
@@ -183,11 +189,8 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
                                 [&](const Surface* plane) { return std::abs(plane->axis.dot(c.axis)) > std::sin(angle); }),
                  planes.end());
     // Each plane n·x = n·o must lie at distance R from the axis, on the side the axis is now.
-    auto side = [&](const Surface* plane) { return (c.point - plane->point).dot(plane->axis) >= 0.0 ? 1.0 : -1.0; };
     if (planes.size() == 1) {
-      const Surface& plane = *planes[0];
-      const double distance = (c.point - plane.point).dot(plane.axis);
-      c.point += (side(&plane) * c.radius - distance) * plane.axis;
+      c.point += to_distance_from(*planes[0], c.point, c.radius) * planes[0]->axis;
     } else if (planes.size() >= 2) {
       // The first two planes that are not parallel to each other.
       const Surface* second = nullptr;
@@ -201,7 +204,7 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       int row = 0;
       for (const Surface* plane : {planes[0], second}) {
         a.row(row) << plane->axis.dot(e1), plane->axis.dot(e2);
-        b[row] = side(plane) * c.radius - (c.point - plane->point).dot(plane->axis);
+        b[row] = to_distance_from(*plane, c.point, c.radius);
         ++row;
       }
       const Eigen::Vector2d shift = a.colPivHouseholderQr().solve(b);
@@ -246,8 +249,7 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
     Surface& t = torus.surface;
     for (const Surface* plane : tangent_surfaces(torus.id, SurfaceType::Plane, relations, features)) {
       if (std::abs(plane->axis.dot(t.axis)) < cos_tolerance) continue;
-      const double height = (t.point - plane->point).dot(plane->axis);
-      t.point += ((height >= 0.0 ? 1.0 : -1.0) * t.minor - height) * plane->axis;
+      t.point += to_distance_from(*plane, t.point, t.minor) * plane->axis;
       break;
     }
     for (const Surface* cylinder : tangent_surfaces(torus.id, SurfaceType::Cylinder, relations, features)) {
