@@ -44,8 +44,8 @@ run_target() {
   if [ "$status" -ne 0 ] && [ -z "$execs" ]; then
     printf '%-16s FAILED to run (status %s); see %s\n' "$target" "$status" "$log"
   elif [ "$status" -eq 70 ]; then
-    # libFuzzer's timeout exit code: an input ran longer than the timeout. Slow, not a crash (known
-    # slow inputs live in native/fuzz/known-slow/); FUZZ_STRICT_TIMEOUTS=1 counts it as a failure.
+    # libFuzzer's timeout exit code: an input ran longer than the timeout. Slow, not a crash (inputs
+    # that were slow live in native/fuzz/known-slow/); FUZZ_STRICT_TIMEOUTS=1 counts it as a failure.
     printf '%-16s TIMEOUT after %s executions: a slow input (> %s s) in %s\n' "$target" "${execs:-?}" \
       "$timeout" "$artifacts"
     [ "${FUZZ_STRICT_TIMEOUTS:-0}" = 1 ] || status=0

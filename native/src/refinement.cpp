@@ -249,7 +249,9 @@ RefinedMesh refine_long_triangles(const TriangleMesh& mesh, const MeshTopology& 
 
   Refiner refiner(mesh, topology);
   if (target > 0.0) {
-    refiner.split_long_edges(4.0 / 3.0 * target, static_cast<size_t>(options.max_triangles),  // Botsch & Kobbelt's threshold
+    const double even_sampling = std::max<double>(mesh.num_faces(), area / (kEquilateralArea * target * target));
+    const double max_faces = std::min<double>(options.max_triangles, options.max_oversampling * even_sampling);
+    refiner.split_long_edges(4.0 / 3.0 * target, static_cast<size_t>(max_faces),  // Botsch & Kobbelt's threshold
                              progress.sub(0.1, 0.6));
     progress.step(0.6);
     refiner.flip_to_delaunay(progress.sub(0.6, 0.9));

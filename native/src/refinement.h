@@ -20,6 +20,11 @@ struct RefinementOptions {
   int min_samples = 20000;        // the thesis's meshes had 60–75k triangles; a third of that resolves
                                   // every feature wider than a few triangles
   int max_triangles = 2000000;    // memory bound for the refined mesh
+  // Splitting stops at this many times the triangles that an even sampling of the surface at the
+  // target edge length needs (or the input's count if larger): a fan of slivers that no split can
+  // mend multiplies instead (a degenerate input of a few needles reached 1.6 million faces). The
+  // benchmark's CAD tessellations need up to 8.6 times (as_cylinder's fans of slivers on its caps).
+  double max_oversampling = 12.0;
 };
 
 struct RefinedMesh {
