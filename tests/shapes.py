@@ -130,6 +130,27 @@ def rounded_knob():
     return Part.Solid(profile.revolve(V(0, 0, 0), V(0, 0, 1), 360))
 
 
+def slotted_head(dome=True):
+    """A screw head about Z: a shaft (r 5, 10 long) under a 45° cone out to r 10 at z 5, topped by a
+    dome revolved from an arc (r 20) centred 6 beyond the axis (a lemon: the inner part of a spindle
+    torus, highest on the axis), or flat (dome=False); a slot 3 wide cut across it through the axis
+    down to z 2, into the cone, whose rim then goes all round with two notches (their walls, hyperbolas
+    on the cone, lean over the notch)."""
+    FreeCAD, Part, _ = freecad()
+    V = FreeCAD.Vector
+    top = -7 + np.sqrt(20 ** 2 - 6 ** 2) if dome else 5.0
+    if dome:
+        t0, t1 = np.arctan2(5 + 7, 10 + 6), np.arctan2(top + 7, 6)
+        crown = Part.Arc(*[V(-6 + 20 * np.cos(t), 0, -7 + 20 * np.sin(t)) for t in (t0, 0.5 * (t0 + t1), t1)]).toShape()
+    else:
+        crown = Part.LineSegment(V(10, 0, 5), V(0, 0, 5)).toShape()
+    edges = [Part.LineSegment(V(0, 0, -10), V(5, 0, -10)).toShape(), Part.LineSegment(V(5, 0, -10), V(5, 0, 0)).toShape(),
+             Part.LineSegment(V(5, 0, 0), V(10, 0, 5)).toShape(), crown,
+             Part.LineSegment(V(0, 0, top), V(0, 0, -10)).toShape()]
+    head = Part.Solid(Part.Face(Part.Wire(edges)).revolve(V(0, 0, 0), V(0, 0, 1), 360))
+    return head.cut(Part.makeBox(30, 3, 20, V(-15, -1.5, 2))).removeSplitter()
+
+
 def hexagon_nut(across_flats=20.0, height=8.0, bore=5.0):
     """A hexagon nut chamfered at 30° on both ends: six flats, two end faces, a bore and twelve pieces
     of the two chamfer cones (one at each corner of each end), all about the Z axis."""

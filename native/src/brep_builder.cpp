@@ -12,10 +12,12 @@
 #include <BRepCheck_ListIteratorOfListOfStatus.hxx>
 #include <BRepCheck_Result.hxx>
 #include <BRepGProp.hxx>
+#include <BRepTools_WireExplorer.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <ElSLib.hxx>
 #include <GProp_GProps.hxx>
+#include <Geom2d_Curve.hxx>
 #include <GeomAPI_IntSS.hxx>
 #include <GeomAPI_PointsToBSpline.hxx>
 #include <GeomAPI_ExtremaCurveCurve.hxx>
@@ -29,6 +31,7 @@
 #include <Geom_Plane.hxx>
 #include <Geom_SphericalSurface.hxx>
 #include <Geom_ToroidalSurface.hxx>
+#include <Geom_TrimmedCurve.hxx>
 #include <Precision.hxx>
 #include <ShapeFix_Edge.hxx>
 #include <ShapeFix_Face.hxx>
@@ -51,10 +54,12 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <functional>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -101,9 +106,16 @@ Vec3 common_seam_direction(const Vec3& axis) {
   return (unit - unit.dot(axis) * axis).normalized();
 }
 
-// The surface of feature `s` for a face through `points`; `all_round`: the face goes all round its
-// axis (one of its loops is a closed chain).
-Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& points, bool all_round) {
+// How a face goes all round an axis: the axis (a sphere's polar one) and the direction of the seam.
+struct RoundFace {
+  Vec3 axis, seam;
+  bool winds = false;  // a loop of several chains winds round the axis (else one is a closed chain)
+  int split = -1;      // the chain of the winding loop that the seam crosses
+};
+
+// The surface of feature `s` for a face through `points`; `round`: set when the face goes all round
+// an axis.
+Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& points, const std::optional<RoundFace>& round) {
   Vec3 radial = Vec3::Zero();
   double height = 0.0;
   for (const Vec3& p : points) {
@@ -114,9 +126,7 @@ Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& poi
     if (r.norm() > 0) radial += r.normalized();
   }
   if (!points.empty()) height /= static_cast<double>(points.size());
-  const Vec3 seam = !s.has_direction() ? Vec3::Zero()
-                    : all_round          ? common_seam_direction(s.axis)
-                                         : seam_direction(s.axis, radial);
+  const Vec3 seam = !s.has_direction() ? Vec3::Zero() : round ? round->seam : seam_direction(s.axis, radial);
   switch (s.type) {
     case SurfaceType::Plane: {
       Vec3 x, y;
@@ -132,7 +142,10 @@ Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& poi
                                      s.half_angle, h * std::tan(s.half_angle));
     }
     case SurfaceType::Sphere: {
-      // Poles away from the face: the polar axis orthogonal to the face's mean direction.
+      // A band all round an axis: that axis is the polar one, so that its circles are parallels
+      // (a circle that crosses the meridians has no exact curve in the parameter plane).
+      if (round) return new Geom_SphericalSurface(gp_Ax3(to_pnt(s.point), to_dir(round->axis), to_dir(round->seam)), s.radius);
+      // Otherwise poles away from the face: the polar axis orthogonal to the face's mean direction.
       Vec3 mean = Vec3::Zero();
       for (const Vec3& p : points) mean += (p - s.point).normalized();
       Vec3 x = mean.norm() > 1e-9 ? Vec3(-mean.normalized()) : Vec3::UnitX();
@@ -140,8 +153,8 @@ Handle(Geom_Surface) make_surface(const Surface& s, const std::vector<Vec3>& poi
       orthonormal_frame(x, z, unused);
       return new Geom_SphericalSurface(gp_Ax3(to_pnt(s.point), to_dir(z), to_dir(x)), s.radius);
     }
-    case SurfaceType::Torus:
-      return new Geom_ToroidalSurface(gp_Ax3(to_pnt(s.point), to_dir(s.axis), to_dir(seam)), s.radius, s.minor);
+    case SurfaceType::Torus:  // a lemon (radius < 0) is the part of a spindle torus about v = π
+      return new Geom_ToroidalSurface(gp_Ax3(to_pnt(s.point), to_dir(s.axis), to_dir(seam)), std::abs(s.radius), s.minor);
     case SurfaceType::Freeform:
       break;
   }
@@ -283,6 +296,7 @@ Vec2 nearest(const std::vector<Vec2>& candidates, const Vec2& reference) {
 // sin(5 degrees): directions this close count as parallel when an exact closed form is not found
 // (the feature graph's parallel tolerance).
 constexpr double kNearlyParallel = 0.0872;
+constexpr int kToleranceSamples = 64;  // points of a fitted edge measured against its two surfaces
 
 Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const std::vector<Vec3>& points,
                                      double angle_eps, double tol) {
@@ -501,6 +515,9 @@ class BrepBuilder {
     since = now;
   }
   std::vector<int> merge_same_surfaces(const std::vector<int>& labels) const;
+  std::optional<RoundFace> round_face(int region) const;
+  bool split_at_seam(int chain, const Handle(Geom_Curve)& curve, double u0, double u1, const TopoDS_Vertex& v0,
+                     const TopoDS_Vertex& v1, double tolerance);
   std::vector<int> dissolve_sampling_blends(const TriangleMesh& mesh, const MeshTopology& topology,
                                             std::vector<int> labels) const;
   void make_vertices(const MeshTopology& topology);
@@ -519,6 +536,9 @@ class BrepBuilder {
   BoundaryTopology topo_;
   std::vector<Handle(Geom_Surface)> region_surfaces_;
   std::vector<double> region_sense_;  // +1 when the surface normal points out of the part
+  std::vector<char> region_winds_;    // a loop of several chains winds round the surface's axis
+  std::map<int, int> seam_splits_;    // chain -> the winding region whose seam crosses it
+  std::map<int, std::array<TopoDS_Edge, 2>> split_edges_;  // such a chain's edge, in two at the seam
   std::vector<Vec3> region_centroid_;  // mean of the region's triangle centroids
   std::map<int, TopoDS_Vertex> vertices_;
   std::map<int, Vec3> corner_points_;
@@ -528,6 +548,87 @@ class BrepBuilder {
   std::vector<TopoDS_Face> faces_;
   std::vector<int> face_region_;
 };
+
+// Whether a region goes all round the axis of its surface, and where its seam goes then. A loop of
+// one closed chain goes round the axis of the surfaces on both sides (a sphere band takes the other
+// side's as its polar axis); the seam goes along common_seam_direction. A loop of several chains
+// that winds round the axis (a cone's rim cut by a slot) decides instead: its seam crosses the
+// middle of the loop's longest chain, whose edge split_at_seam cuts there, so that healing joins
+// the seam to vertices on both loops.
+std::optional<RoundFace> BrepBuilder::round_face(int region) const {
+  const Surface& s = surfaces_[topo_.region_feature[region]];
+  if (s.type == SurfaceType::Freeform) return std::nullopt;
+  std::optional<RoundFace> closed;  // from a closed chain; a winding loop beside it decides the seam
+  for (const auto& loop : topo_.region_loops[region]) {
+    const BoundaryChain& first = topo_.chains[loop.front().chain];
+    if (loop.size() == 1 && first.closed) {
+      const int across = first.left == region ? first.right : first.left;
+      const Surface* other = across >= 0 ? &surfaces_[topo_.region_feature[across]] : nullptr;
+      if (closed || (!s.has_direction() && !(other && other->has_direction()))) continue;
+      const Vec3 axis = s.has_direction() ? s.axis : other->axis;
+      closed = RoundFace{axis, common_seam_direction(axis)};
+      continue;
+    }
+    // A band's loop (a single loop round the axis would bound a cap about a pole or apex).
+    if (!s.has_direction() || s.type == SurfaceType::Plane || topo_.region_loops[region].size() < 2) continue;
+    // The turn of the loop about the axis: ±2π when it winds round it.
+    Vec3 e1, e2;
+    orthonormal_frame(s.axis, e1, e2);
+    double turn = 0.0, previous = 0.0;
+    bool started = false;
+    for (const ChainUse& use : loop) {
+      const std::vector<int>& vertices = topo_.chains[use.chain].vertices;
+      for (size_t i = 0; i < vertices.size(); ++i) {
+        const Vec3 q = mesh_.V.row(vertices[use.forward ? i : vertices.size() - 1 - i]).transpose() - s.point;
+        const double angle = std::atan2(q.dot(e2), q.dot(e1));
+        if (started) turn += std::remainder(angle - previous, 2.0 * M_PI);
+        previous = angle;
+        started = true;
+      }
+    }
+    if (std::abs(turn) < M_PI) continue;
+    // The seam crosses the loop's longest chain at its middle: a seam through a corner would
+    // run through the face above or below it wherever an edge there leans across (the walls of a
+    // slot in a cone's rim narrow upwards).
+    const auto longest = std::max_element(loop.begin(), loop.end(), [&](const ChainUse& x, const ChainUse& y) {
+      return topo_.chains[x.chain].vertices.size() < topo_.chains[y.chain].vertices.size();
+    });
+    const std::vector<int>& vertices = topo_.chains[longest->chain].vertices;
+    if (vertices.size() < 3) continue;
+    const Vec3 q = mesh_.V.row(vertices[vertices.size() / 2]).transpose() - s.point;
+    const Vec3 radial = q - q.dot(s.axis) * s.axis;
+    if (radial.norm() > 1e-9 * diagonal_) return RoundFace{s.axis, radial.normalized(), true, longest->chain};
+  }
+  return closed;
+}
+
+// The edge of a chain that the seam of a winding face crosses (round_face), also made as two edges
+// that meet on the seam, for the faces on both sides. Returns false if the seam misses it.
+bool BrepBuilder::split_at_seam(int chain, const Handle(Geom_Curve)& curve, double u0, double u1,
+                                const TopoDS_Vertex& v0, const TopoDS_Vertex& v1, double tolerance) {
+  const auto splitting = seam_splits_.find(chain);
+  if (splitting == seam_splits_.end()) return true;
+  const Handle(Geom_Curve) seam = region_surfaces_[splitting->second]->UIso(0.0);
+  GeomAPI_ExtremaCurveCurve crossing(new Geom_TrimmedCurve(curve, u0, u1), seam);
+  if (crossing.NbExtrema() == 0 || crossing.LowerDistance() > 10 * tol_) return false;
+  double t, unused;
+  crossing.LowerDistanceParameters(t, unused);
+  if (!(t > u0 && t < u1)) return false;
+  BRep_Builder builder;
+  TopoDS_Vertex middle;
+  builder.MakeVertex(middle, curve->Value(t), std::max(tolerance, Precision::Confusion()));
+  std::array<TopoDS_Edge, 2> parts;
+  const std::array<std::array<double, 2>, 2> ranges = {{{u0, t}, {t, u1}}};
+  const std::array<std::array<TopoDS_Vertex, 2>, 2> ends = {{{v0, middle}, {middle, v1}}};
+  for (int i = 0; i < 2; ++i) {
+    builder.MakeEdge(parts[i], curve, tolerance);
+    builder.Add(parts[i], ends[i][0].Oriented(TopAbs_FORWARD));
+    builder.Add(parts[i], ends[i][1].Oriented(TopAbs_REVERSED));
+    builder.Range(parts[i], ranges[i][0], ranges[i][1]);
+  }
+  split_edges_[chain] = parts;
+  return true;
+}
 
 std::vector<int> BrepBuilder::merge_same_surfaces(const std::vector<int>& labels) const {
   std::vector<int> representative(surfaces_.size());
@@ -734,8 +835,12 @@ void BrepBuilder::make_edges(BrepResult& result) {
           return region >= 0 && !region_surfaces_[region].IsNull() && region_surfaces_[region]->IsUPeriodic() &&
                  !is_cap(static_cast<size_t>(region));
         };
-        if (periodic(chain.left) != periodic(chain.right)) {
-          const int region = periodic(chain.left) ? chain.left : chain.right;
+        // So does a circle beside a face that winds round its axis (whose seam its neighbour took).
+        const bool winds = (chain.left >= 0 && region_winds_[chain.left]) || (chain.right >= 0 && region_winds_[chain.right]);
+        if (periodic(chain.left) != periodic(chain.right) || (winds && periodic(chain.left) && periodic(chain.right))) {
+          const int region = chain.left >= 0 && region_winds_[chain.left] ? chain.left
+                             : chain.right >= 0 && region_winds_[chain.right] ? chain.right
+                             : periodic(chain.left) ? chain.left : chain.right;
           const Handle(Geom_Curve) seam = region_surfaces_[region]->UIso(0.0);
           GeomAPI_ExtremaCurveCurve crossing(curve, seam);
           if (crossing.NbExtrema() > 0 && crossing.LowerDistance() <= 10 * tol_) {
@@ -779,8 +884,18 @@ void BrepBuilder::make_edges(BrepResult& result) {
         if (attempt == 1) throw Standard_Failure("the edge's direction is ambiguous");
         curve = curve->Reversed();
       }
+      // A fitted curve passes through the chain's points, which lie on both surfaces, and strays
+      // from them in between by up to its fitting tolerance: its edge's tolerance says by how much.
+      double edge_tolerance = Precision::Confusion();
+      if (report.curve == "fitted") {
+        for (int i = 0; i <= kToleranceSamples; ++i) {
+          const Vec3 p = to_vec(curve->Value(u0 + (u1 - u0) * i / kToleranceSamples));
+          edge_tolerance = std::max(edge_tolerance, 1.01 * std::abs(signed_distance(a, p)));
+          if (b) edge_tolerance = std::max(edge_tolerance, 1.01 * std::abs(signed_distance(*b, p)));
+        }
+      }
       TopoDS_Edge edge;
-      builder.MakeEdge(edge, curve, Precision::Confusion());
+      builder.MakeEdge(edge, curve, edge_tolerance);
       builder.Add(edge, v0.Oriented(TopAbs_FORWARD));
       builder.Add(edge, v1.Oriented(TopAbs_REVERSED));
       builder.Range(edge, u0, u1);
@@ -788,11 +903,49 @@ void BrepBuilder::make_edges(BrepResult& result) {
       builder.UpdateVertex(v0, std::max(BRep_Tool::Tolerance(v0), 1.01 * (to_vec(curve->Value(u0)) - p0).norm()));
       builder.UpdateVertex(v1, std::max(BRep_Tool::Tolerance(v1), 1.01 * (to_vec(curve->Value(u1)) - p1).norm()));
       edges_[c] = edge;
-      edge_ok_[c] = 1;
+      edge_ok_[c] = split_at_seam(c, curve, u0, u1, v0, v1, edge_tolerance);
     } catch (const Standard_Failure& failure) {
       report.curve.clear();
       result.problems.push_back({topo_.region_feature[chain.left], occt_message(failure, "an edge could not be made")});
     }
+  }
+}
+
+// The pcurves of a wire that winds once round the axis of a u-periodic surface, made continuous in
+// u from the vertex on the seam on (FixAddPCurve puts each in the period nearest the surface's):
+// the loop then runs from the seam round to it, and healing closes the face along the seam. Were
+// they left as they come, healing takes the stretch before the seam for a loop of its own.
+void continue_pcurves(const TopoDS_Wire& wire, const TopoDS_Face& face) {
+  const double period = BRep_Tool::Surface(face)->UPeriod();
+  struct Use {
+    TopoDS_Edge edge;
+    Handle(Geom2d_Curve) pcurve;
+    gp_Pnt2d start, end;
+  };
+  std::vector<Use> uses;
+  for (BRepTools_WireExplorer it(wire, face); it.More(); it.Next()) {
+    double first, last;
+    Use use{it.Current(), BRep_Tool::CurveOnSurface(it.Current(), face, first, last), {}, {}};
+    if (use.pcurve.IsNull()) return;
+    const bool reversed = use.edge.Orientation() == TopAbs_REVERSED;
+    use.start = use.pcurve->Value(reversed ? last : first);
+    use.end = use.pcurve->Value(reversed ? first : last);
+    uses.push_back(use);
+  }
+  if (uses.empty()) return;
+  auto off_seam = [&](double u) { return std::abs(std::remainder(u, period)); };
+  const auto seam = std::min_element(uses.begin(), uses.end(),
+                                     [&](const Use& x, const Use& y) { return off_seam(x.start.X()) < off_seam(y.start.X()); });
+  std::rotate(uses.begin(), seam, uses.end());
+  BRep_Builder builder;
+  double u = uses.front().start.X() - std::remainder(uses.front().start.X(), period);  // the seam
+  for (const Use& use : uses) {
+    const double shift = period * std::round((u - use.start.X()) / period);
+    if (shift != 0.0) {
+      const Handle(Geom2d_Curve) moved = Handle(Geom2d_Curve)::DownCast(use.pcurve->Translated(gp_Vec2d(shift, 0.0)));
+      builder.UpdateEdge(use.edge, moved, face, BRep_Tool::Tolerance(use.edge));
+    }
+    u = use.end.X() + shift;
   }
 }
 
@@ -888,7 +1041,13 @@ void BrepBuilder::make_faces(BrepResult& result) {
           const ChainUse& use = loop[outward ? i : n - 1 - i];
           if (collapsed_[use.chain]) continue;
           const bool forward = use.forward == outward;
-          builder.Add(wire, edges_[use.chain].Oriented(forward ? TopAbs_FORWARD : TopAbs_REVERSED));
+          const auto split = split_edges_.find(use.chain);
+          if (split == split_edges_.end()) {
+            builder.Add(wire, edges_[use.chain].Oriented(forward ? TopAbs_FORWARD : TopAbs_REVERSED));
+          } else {
+            for (const TopoDS_Edge& part : split->second)
+              builder.Add(wire, part.Oriented(forward ? TopAbs_FORWARD : TopAbs_REVERSED));
+          }
         }
         wire.Closed(Standard_True);
         builder.Add(face, wire);
@@ -897,6 +1056,8 @@ void BrepBuilder::make_faces(BrepResult& result) {
       for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) {
         add_pcurves.FixAddPCurve(TopoDS::Edge(e.Current()), face, Standard_False, tol_);
       }
+      if (region_winds_[r])
+        for (TopExp_Explorer w(face, TopAbs_WIRE); w.More(); w.Next()) continue_pcurves(TopoDS::Wire(w.Current()), face);
       faces_.push_back(outward ? face : TopoDS::Face(face.Reversed()));
       face_region_.push_back(static_cast<int>(r));
     } catch (const Standard_Failure& failure) {
@@ -1079,6 +1240,8 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   stage(result, "brep.topology", since);
   progress_.step(0.45);
 
+  progress_.sub("vertices", 0.0, 1.0).step(0.5);
+  make_vertices(topology);
   // One surface per region, oriented against the mesh normals.
   const int regions = static_cast<int>(topo_.region_feature.size());
   std::vector<std::vector<Vec3>> region_points(regions);
@@ -1091,18 +1254,34 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     const Vec3 area_normal = 0.5 * (b - a).cross(c - a);
     region_points[r].push_back(centre);
     const Surface& s = surfaces_[topo_.region_feature[r]];
-    if (s.type != SurfaceType::Freeform) region_sense_[r] += surface_normal(s, centre).dot(area_normal);
+    // OCCT's normal of a spindle torus turns inward on the lemon, beyond the axis, where the
+    // parametrization's u direction reverses. (A lemon whose centre circle lies within the
+    // tolerance of the axis is a sphere as much as the torus's other part, which OCCT then takes.)
+    const double occt_sense = s.type == SurfaceType::Torus && s.radius < -tol_ ? -1.0 : 1.0;
+    if (s.type != SurfaceType::Freeform) region_sense_[r] += occt_sense * surface_normal(s, centre).dot(area_normal);
   }
   region_surfaces_.resize(regions);
+  region_winds_.assign(regions, 0);
+  std::vector<std::optional<RoundFace>> rounds(regions);
   for (int r = 0; r < regions; ++r) {
     for (const Vec3& p : region_points[r]) region_centroid_[r] += p / static_cast<double>(region_points[r].size());
-    const bool all_round = std::any_of(topo_.region_loops[r].begin(), topo_.region_loops[r].end(), [&](const auto& loop) {
-      return loop.size() == 1 && topo_.chains[loop.front().chain].closed;
-    });
-    region_surfaces_[r] = make_surface(surfaces_[topo_.region_feature[r]], region_points[r], all_round);
+    rounds[r] = round_face(r);
+    region_winds_[r] = rounds[r] && rounds[r]->winds;
+    if (region_winds_[r]) seam_splits_[rounds[r]->split] = r;
   }
-  progress_.sub("vertices", 0.0, 1.0).step(0.5);
-  make_vertices(topology);
+  for (int r = 0; r < regions; ++r) {
+    // A band beside a face that winds round the same axis takes its seam: healing then joins the
+    // two seams at the vertex of the circle between them.
+    std::optional<RoundFace>& round = rounds[r];
+    for (const auto& loop : topo_.region_loops[r]) {
+      const BoundaryChain& chain = topo_.chains[loop.front().chain];
+      const int across = chain.left == r ? chain.right : chain.left;
+      if (round && !round->winds && loop.size() == 1 && chain.closed && across >= 0 && region_winds_[across] &&
+          rounds[across]->axis.cross(round->axis).norm() <= angle_eps_)
+        round->seam = rounds[across]->seam;
+    }
+    region_surfaces_[r] = make_surface(surfaces_[topo_.region_feature[r]], region_points[r], round);
+  }
   make_edges(result);
   stage(result, "brep.edges", since);
   make_faces(result);

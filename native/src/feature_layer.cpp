@@ -18,6 +18,7 @@
 #include <system_error>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <cmath>
 
@@ -314,6 +315,32 @@ int distinct_points(const PatchPoints& data) {
   return static_cast<int>(seen.size());
 }
 
+// The number of parallels of a surface of revolution (heights along its axis more than `distance`
+// apart) on which the points lie: a tessellation's vertices on k parallels only fix a meridian
+// through k points, which a circle does for any three.
+int distinct_parallels(const PatchPoints& data, const Surface& surface, double distance) {
+  std::vector<double> heights(data.points.rows());
+  for (Eigen::Index i = 0; i < data.points.rows(); ++i)
+    heights[i] = (data.points.row(i).transpose() - surface.point).dot(surface.axis);
+  std::sort(heights.begin(), heights.end());
+  int count = heights.empty() ? 0 : 1;
+  for (size_t i = 1; i < heights.size(); ++i) count += heights[i] - heights[i - 1] > distance;
+  return count;
+}
+
+// A lemon (the inner part of a spindle torus) fitted to `data`, if its points fix one: on more than
+// three parallels (see above; or it starts from `start`, a lemon fixed before), and with its centre
+// circle off its axis by more than `tolerance` (else it is a sphere).
+std::optional<SurfaceFit> fit_lemon(const PatchPoints& data, const FitOptions& options, double tolerance,
+                                    double distance, const Surface* start = nullptr) {
+  FitOptions lemons = options;
+  lemons.lemons = true;
+  const SurfaceFit fit = fit_surface(SurfaceType::Torus, data, lemons, start);
+  if (!fit.valid || fit.surface.radius >= -tolerance || (!start && distinct_parallels(data, fit.surface, distance) <= 3))
+    return std::nullopt;
+  return fit;
+}
+
 // On an exact tessellation, a small curved face (a chamfer cone cut by a hexagon) may fall apart
 // into single facets of which no pair determines its surface. From each small piece, its nearest
 // small neighbours are gathered until they have three distinct vertices more than a surface type
@@ -597,6 +624,22 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     if (!ok && ((a_small && b_small) || one_curved || sectors)) {
       merged = identify_points(both, larger.curvature);
       ok = accepted(merged);
+      // Identification accepts the simplest type within the distance tolerance, which on an exact
+      // tessellation may take a sphere or a cone for two curved pieces of a lemon-shaped dome (a
+      // spindle torus's inner part) that it does not explain: then the torus, if it does, from the
+      // piece that is a lemon already if one is. (Planar facets tell no curvature: the few points
+      // of two fit a lemon of any shape.)
+      auto curved = [](SurfaceType t) { return t != SurfaceType::Plane && t != SurfaceType::Freeform; };
+      auto lemon_piece = [](const Feature& f) { return f.type == SurfaceType::Torus && f.surface.radius < 0.0; };
+      const Surface* start = lemon_piece(fa) ? &fa.surface : lemon_piece(fb) ? &fb.surface : nullptr;
+      if (exact && !ok && curved(merged.type) && (merged.type != SurfaceType::Torus || start) && curved(fa.type) &&
+          curved(fb.type)) {
+        if (const std::optional<SurfaceFit> lemon = fit_lemon(both, options.fit, tolerance, exact_distance, start)) {
+          Feature torus = merged;
+          torus.set_fit(*lemon);
+          if ((ok = accepted(torus))) merged = torus;
+        }
+      }
     }
     // On a noisy mesh, two planes may be the halves of a narrow fillet, each as flat as the noise
     // lets it look: a curved surface joins them when its normals fit the union better than either
@@ -1106,6 +1149,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   const double diagonal = bounding_box_diagonal(mesh);
   layer.distance_tolerance = options.distance_tolerance > 0.0 ? options.distance_tolerance : 1e-3 * diagonal;
   const double floor = coordinate_floor(mesh);
+  // What an exact tessellation's vertices may deviate from their surface.
+  const double exact_distance = std::max(kExactFraction * layer.distance_tolerance, 2.0 * floor);
 
   const MeshTopology topology(mesh);
   const Eigen::VectorXd area = face_areas(mesh);
@@ -1231,6 +1276,16 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         return f.type == SurfaceType::Freeform || f.rms > split_above || f.normal_rms > split_normals_above ||
                (exact_mesh && f.max_error > split_above);
       };
+      // A dome revolved from an arc centred beyond its axis (a lemon) fits none of the surfaces that
+      // identification seeds from its points; on an exact tessellation its torus may be a lemon.
+      for (int p = 0; p < num_patches && exact_mesh; ++p) {
+        if (!badly_fitting(layer.features[p]) || points[p].points.rows() < kInteriorPoints) continue;
+        if (const std::optional<SurfaceFit> lemon = fit_lemon(points[p], options.fit, layer.distance_tolerance, exact_distance)) {
+          Feature torus = layer.features[p];
+          torus.set_fit(*lemon);
+          if (!badly_fitting(torus)) layer.features[p] = torus;
+        }
+      }
       // Grows the surfaces that fit discs of patch p. A patch that the histograms call curved has no
       // planar regions: across a disc, the sag of a large fillet hides within the distance tolerance.
       auto grow_surfaces = [&](int p, const ProgressSpan& span) {
@@ -1341,7 +1396,6 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   }
   if (rimless) points = patch_points(mesh, layer.labels, patches);  // what merging sees: the whole rim
   std::set<std::pair<int, int>> rejected;
-  const double exact_distance = std::max(kExactFraction * layer.distance_tolerance, 2.0 * floor);
   // Later passes refit fewer open pairs, and most runs stop early: each pass takes a third of
   // what is left of the span.
   const ProgressSpan merge = progress.sub("merge", 0.5, 0.87);

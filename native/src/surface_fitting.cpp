@@ -50,7 +50,8 @@ Surface perturbed(const Surface& s, const double* d) {
   return out;
 }
 
-bool plausible(const Surface& s) {
+// A torus is a ring or spindle torus (radius >= 0), or with `lemon` the lemon of a spindle torus.
+bool plausible(const Surface& s, bool lemon = false) {
   const bool finite = s.point.allFinite() && s.axis.allFinite() && std::isfinite(s.radius) &&
                       std::isfinite(s.minor) && std::isfinite(s.half_angle);
   if (!finite) return false;
@@ -58,7 +59,7 @@ bool plausible(const Surface& s) {
     case SurfaceType::Sphere:
     case SurfaceType::Cylinder: return s.radius > 0.0;
     case SurfaceType::Cone: return s.half_angle > 0.0 && s.half_angle < 0.5 * M_PI;
-    case SurfaceType::Torus: return s.minor > 0.0 && s.radius >= 0.0;
+    case SurfaceType::Torus: return s.minor > 0.0 && (lemon ? s.radius < 0.0 && s.radius > -s.minor : s.radius >= 0.0);
     default: return true;
   }
 }
@@ -258,7 +259,7 @@ double cost(const Surface& surface, const Sample& s, const std::vector<double>& 
 }
 
 // Levenberg–Marquardt on the weighted geometric distances, forward-difference Jacobian.
-Surface refine(Surface surface, const Sample& s, const std::vector<double>& w, int max_iterations) {
+Surface refine(Surface surface, const Sample& s, const std::vector<double>& w, int max_iterations, bool lemon) {
   const int k = parameter_count(surface.type);
   const int n = static_cast<int>(s.p.size());
   if (n < k) return surface;
@@ -286,7 +287,7 @@ Surface refine(Surface surface, const Sample& s, const std::vector<double>& w, i
       damped.diagonal() += lambda * (normal.diagonal().array() + 1e-12).matrix();
       const Eigen::VectorXd step = damped.ldlt().solve(-gradient);
       const Surface candidate = perturbed(surface, step.data());
-      const double next = plausible(candidate) ? cost(candidate, s, w, d) : kInfinity;
+      const double next = plausible(candidate, lemon) ? cost(candidate, s, w, d) : kInfinity;
       if (next < current) {
         const double decrease = current - next;
         surface = candidate;
@@ -443,16 +444,19 @@ SurfaceFit fit_surface(SurfaceType type, const FitData& data, const FitOptions& 
   for (double& v : sample.v) v /= sample_total;
 
   const Surface initial = start && start->type == type ? to_local(*start, centre, scale) : seed(type, sample);
-  if (!plausible(initial) || initial.type != type) return fit;
-  Surface refined = refine(initial, sample, sample.w, options.max_iterations);
-  if (options.robust) refined = refine(refined, sample, huber_weights(refined, sample), options.max_iterations);
+  // The start decides whether a torus is a lemon (a seed only where options.lemons allows it); the
+  // refinement does not cross from one to the other.
+  const bool lemon = type == SurfaceType::Torus && initial.radius < 0.0 && (options.lemons || start);
+  if (!plausible(initial, lemon) || initial.type != type) return fit;
+  Surface refined = refine(initial, sample, sample.w, options.max_iterations, lemon);
+  if (options.robust) refined = refine(refined, sample, huber_weights(refined, sample), options.max_iterations, lemon);
 
   // The refinement is kept only where it lowers the residual (on the points it saw).
   std::vector<double> d(sample.p.size());
   const bool better = cost(refined, sample, sample.w, d) <= cost(initial, sample, sample.w, d);
   fit.surface = to_world(better ? refined : initial, centre, scale);
   fit_residuals(fit.surface, points, weights, fit.rms, fit.max_error);
-  fit.valid = plausible(fit.surface);
+  fit.valid = plausible(fit.surface, lemon);
   measure_spreads(data, fit);
   return fit;
 }
