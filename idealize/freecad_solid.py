@@ -59,8 +59,8 @@ def primitive_shape(feature, points):
         return Part.makeCone(max(low, 0.0) * t, max(high, 0.0) * t, max(high - low, 1e-6), base, _vector(axis))
     if kind == "sphere":
         return Part.makeSphere(float(p["radius"]), _vector(p["center"]))
-    if kind == "torus":
-        return Part.makeTorus(float(p["major"]), float(p["minor"]), _vector(p["center"]), _vector(p["axis"]))
+    if kind == "torus":  # a lemon (major < 0) lies on the spindle torus of radii |major|, minor
+        return Part.makeTorus(abs(float(p["major"])), float(p["minor"]), _vector(p["center"]), _vector(p["axis"]))
     return None
 
 

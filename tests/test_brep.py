@@ -425,6 +425,12 @@ def test_cad_export_of_a_slotted_lemon_dome_gives_its_solid():
     assert solid.solid and solid.valid and solid.part_shape().isValid(), solid.problems
     assert solid.surface_types == {"plane": 4, "cylinder": 1, "cone": 1, "torus": 2}
     assert abs(solid.volume / part.Volume - 1) < 5e-4
+    # Each feature's Part primitive: a lemon's is the spindle torus it lies on.
+    from idealize.freecad_solid import primitive_shape
+    labels = np.asarray(layer.labels)
+    for feature in layer.features:
+        shape = primitive_shape(feature, V[np.unique(F[labels == feature["id"]])])
+        assert shape is not None and shape.isValid()
 
 
 @needs_freecad
