@@ -451,6 +451,23 @@ def test_scan_of_a_slotted_flat_head_closes(seed):
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_cad_export_of_a_slotted_screw_gives_its_solid():
+    """The benchmark's CAD export of occt_screw: its head's dome is a lemon cut in halves by the slot
+    (it fell into some 180 features of a facet or two), the 45° cone under it winds round the axis
+    with two notches, and its point is a cone band one facet wide between two circles (which a
+    sphere fits as exactly: a chamfer meets its neighbours at creases). The solid has the part's
+    surface types and its volume."""
+    m = shapes.benchmark_mesh("occt_screw.step", "cad")
+    solid = idealize.make_solid(idealize.idealize(Mesh(m.V, m.F)))
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == {"plane": 4, "cylinder": 1, "cone": 2, "torus": 2}
+    truth = shapes.benchmark_truth("occt_screw.step")
+    assert solid.surface_types == truth["surface_types"] and solid.faces == truth["faces"]
+    assert abs(solid.volume / truth["volume"] - 1) < 5e-4
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_scan_of_coaxial_blends_closes():
     """The benchmark's scan of as_customblend_05: tori and a cone between cylinders and planes about
     one axis, 10 m from the origin. Its rim tori's bands and the cone between two tori were invalid

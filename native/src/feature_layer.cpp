@@ -1542,6 +1542,31 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
   build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
                       options.radius_tolerance, layer.adjacency, layer.relations);
+  // On an exact tessellation a sphere band one facet row wide is a cone as much: any two coaxial
+  // circles lie on both, and identification prefers the sphere. A chamfer meets its neighbours at
+  // creases, while a sphere zone of a design (a ball between fillets, a rounded corner) is tangent
+  // to some: a sphere that meets every neighbour at a crease, and that a cone explains as exactly,
+  // is a cone (occt_screw's point).
+  if (exact_mesh) {
+    std::vector<char> tangent(layer.features.size(), 0), creased(layer.features.size(), 0);
+    for (const FeatureAdjacency& a : layer.adjacency)
+      for (int id : {a.a, a.b}) (a.continuity == Continuity::G1 ? tangent : creased)[id] = 1;
+    const std::vector<PatchPoints> whole = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), -1);
+    const double normal_floor = options.normal_floor_degrees * M_PI / 180.0;
+    bool retyped = false;
+    for (Feature& f : layer.features) {
+      if (f.type != SurfaceType::Sphere || tangent[f.id] || !creased[f.id]) continue;
+      const SurfaceFit cone = fit_surface(SurfaceType::Cone, whole[f.id], options.fit);
+      if (!cone.valid || !explains_every_point(cone.surface, whole[f.id], exact_distance,
+                                               3.0 * f.normal_spread + normal_floor, kLargestFacetTurn))
+        continue;
+      f.set_fit(cone);
+      retyped = true;
+    }
+    if (retyped)
+      build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
+                          options.radius_tolerance, layer.adjacency, layer.relations);
+  }
   stage("relations");
   if (options.idealize) {
     IdealizationOptions ideal;
