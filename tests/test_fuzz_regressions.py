@@ -42,7 +42,7 @@ try:
             mesh = decode_segment_input(stream.read())
         layer = idealize.idealize(mesh)
         assert len(layer.labels) == len(mesh.faces)
-        print("refined", len(idealize.segment(mesh).working["working_faces"]))
+        print("refined", len(layer.segmentation.working["working_faces"]))
     else:
         mesh = idealize.load_mesh(path)
         assert len(mesh.faces) > 0
