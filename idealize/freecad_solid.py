@@ -4,12 +4,13 @@ Works in freecadcmd and in the GUI; the GUI commands (idealize.gui) add undo and
 """
 import numpy as np
 
+from ._loader import native
 from .brep import make_solid
 from .freecad_mesh import SURFACE_COLORS, idealize_mesh_object
 
 # Surface type of a Part face -> the type names of the feature layer.
 PART_SURFACE_TYPES = {"Plane": "plane", "Cylinder": "cylinder", "Cone": "cone", "Sphere": "sphere",
-                      "Toroid": "torus"}
+                      "Toroid": "torus", "BSplineSurface": "freeform"}
 
 
 def solid_of_mesh_object(obj, layer=None):
@@ -33,13 +34,46 @@ def _frame(axis):
     return axis, x, np.cross(axis, x)
 
 
-def primitive_shape(feature, points):
+def bspline_surface(points, normals=None, weights=None):
+    """The Part.BSplineSurface fitted to a freeform patch: `points` (n, 3) as a height field over
+    their mean plane (a bicubic B-spline, reaching a little beyond them); `normals` (m, 3, e.g. its
+    face normals) check that the patch is one, `weights` (n,) default to 1. Raises ValueError with
+    the reason when it is not, or for fewer than 16 points."""
+    import FreeCAD  # noqa: F401  (FreeCAD before Part)
+    import Part
+    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    normals = np.ascontiguousarray(np.zeros((0, 3)) if normals is None else normals, dtype=np.float64).reshape(-1, 3)
+    weights = np.ones(len(points)) if weights is None else np.ascontiguousarray(weights, dtype=np.float64).reshape(-1)
+    if len(weights) != len(points):
+        raise ValueError("weights must have one value per point")
+    if not (np.all(np.isfinite(points)) and np.all(np.isfinite(normals)) and np.all(weights >= 0)):
+        raise ValueError("points and normals must be finite, weights non-negative")
+    fit = native.fit_bspline_surface(points, normals, weights)
+    if not fit["valid"]:
+        raise ValueError(fit["problem"])
+    degree, poles = fit["degree"], fit["poles"]
+    ends = lambda knots: [degree + 1] + [1] * (len(knots) - 2) + [degree + 1]  # noqa: E731
+    surface = Part.BSplineSurface()
+    surface.buildFromPolesMultsKnots([[_vector(p) for p in row] for row in poles], ends(fit["knots_u"]),
+                                     ends(fit["knots_v"]), [float(k) for k in fit["knots_u"]],
+                                     [float(k) for k in fit["knots_v"]], False, False, degree, degree)
+    return surface
+
+
+def primitive_shape(feature, points, normals=None):
     """A Part shape for one feature, sized to cover its patch's `points` (n, 3): a plane face
     over the patch's extent, a cylinder or cone between its extreme heights along the axis, a
-    whole sphere or torus. None for freeform features."""
+    whole sphere or torus, the B-spline face fitted to a freeform patch (`normals`: its face
+    normals, which tell whether it is a height field). None for a freeform patch that no B-spline
+    surface fits."""
     import FreeCAD  # noqa: F401  (FreeCAD before Part)
     import Part
     kind, p = feature["type"], feature["params"]
+    if kind == "freeform":
+        try:
+            return bspline_surface(points, normals).toShape()
+        except ValueError:
+            return None
     if kind == "plane":
         normal, x, y = _frame(p["normal"])
         origin = np.asarray(p["point"], dtype=np.float64)
@@ -66,7 +100,8 @@ def primitive_shape(feature, points):
 
 def make_primitives(doc, source_obj, layer):
     """Add an App::DocumentObjectGroup "<Label>_Primitives" holding one Part::Feature per
-    analytic feature (named "F<id>_<type>"), placed and sized by the idealized parameters."""
+    feature (named "F<id>_<type>"), placed and sized by the idealized parameters (a freeform
+    feature's is its fitted B-spline face, when one fits)."""
     mesh = layer.mesh
     labels = np.asarray(layer.labels)
     group = doc.addObject("App::DocumentObjectGroup", source_obj.Name + "_Primitives")
@@ -75,7 +110,10 @@ def make_primitives(doc, source_obj, layer):
         faces = mesh.faces[labels == feature["id"]]
         if not len(faces):
             continue
-        shape = primitive_shape(feature, mesh.vertices[np.unique(faces)])
+        corners = mesh.vertices[faces]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        normals /= np.maximum(np.linalg.norm(normals, axis=1), 1e-300)[:, None]
+        shape = primitive_shape(feature, mesh.vertices[np.unique(faces)], normals)
         if shape is None:
             continue
         obj = doc.addObject("Part::Feature", "F%d_%s" % (feature["id"], feature["type"]))

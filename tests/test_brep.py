@@ -126,18 +126,69 @@ def test_tangent_edges_are_exact():
 
 
 @needs_freecad
-def test_a_part_that_cannot_close_names_its_features():
-    """A freeform top has no analytic face: the other faces come back as a valid shell, the
-    freeform feature is named, and nothing claims to be a solid."""
+@pytest.mark.parametrize("export", [None, 5e-4, 2e-3])
+def test_freeform_top_becomes_a_bspline_face(export, tmp_path):
+    """The wavy top, a freeform feature, gets a B-spline surface fitted to its vertices, which the
+    sides' planes cut: a valid solid of the part's faces and volume, in STEP too, whose freeform
+    primitive is that B-spline's face. Before, the top had no face and the part no solid. (None: the
+    fine tessellation; else a CAD export at that share of the diagonal, 0.35 rad.)"""
     part = wavy_top()
-    layer, solid = solid_of(part)
-    freeform = [f["id"] for f in layer.features if f["type"] == "freeform"]
-    assert freeform
-    assert not solid.solid and not solid.closed and solid.volume == 0
-    assert set(freeform) <= set(solid.failed_features())
-    assert any("freeform" in message for _, message in solid.problems)
-    # The five planar sides (and what else could be made) come back as a valid open shell.
-    assert solid.valid and solid.faces >= 5 and solid.surface_types["plane"] >= 5
+    if export is None:
+        V, F, _ = shapes.tessellate_with_faces(part, 0.05)
+    else:
+        V, F, _ = shapes.cad_export(part, export * part.BoundBox.DiagonalLength, 0.35)
+    layer = idealize.idealize(Mesh(V, F))
+    solid = idealize.make_solid(layer)
+    assert solid.solid and solid.valid and solid.problems == [], solid.problems
+    assert solid.surface_types == {"bspline": 1, "plane": 5}
+    assert solid.volume == pytest.approx(part.Volume, rel=2e-4)
+    assert solid.max_deviation < 2e-3 * part.BoundBox.DiagonalLength
+    _, Part, _ = shapes.freecad()
+    path = tmp_path / "wavy.step"
+    solid.write_step(path)
+    back = Part.read(str(path))
+    assert len(back.Solids) == 1 and back.Solids[0].isValid() and len(back.Faces) == 6
+    from idealize.freecad_solid import primitive_shape
+    labels = np.asarray(layer.labels)
+    [freeform] = [f for f in layer.features if f["type"] == "freeform"]
+    faces = F[labels == freeform["id"]]
+    normals = np.cross(V[faces[:, 1]] - V[faces[:, 0]], V[faces[:, 2]] - V[faces[:, 0]])
+    face = primitive_shape(freeform, V[np.unique(faces)], normals / np.linalg.norm(normals, axis=1)[:, None])
+    assert face.isValid() and type(face.Surface).__name__ == "BSplineSurface"
+    assert face.Area > part.Faces[[type(f.Surface).__name__ for f in part.Faces].index("BSplineSurface")].Area
+
+
+def wavy_drum():
+    """A drum lofted through three closed B-spline curves of radius 15 ± 1.5 (three waves): a
+    freeform side all round its axis, between two planes."""
+    FreeCAD, Part, _ = shapes.freecad()
+    wires = []
+    for z in (0.0, 10.0, 20.0):
+        t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+        r = 15 + 1.5 * np.sin(3 * t + z / 8)
+        curve = Part.BSplineCurve()
+        curve.interpolate([FreeCAD.Vector(a * np.cos(b), a * np.sin(b), z) for a, b in zip(r, t)], PeriodicFlag=True)
+        wires.append(Part.Wire(curve.toShape()))
+    return Part.makeLoft(wires, True)
+
+
+@needs_freecad
+def test_a_part_that_cannot_close_names_its_features():
+    """A freeform side that goes all round the drum is no height field over any plane: it gets no
+    surface, its feature is named with the reason, the end planes come back as a valid open shell,
+    and nothing claims to be a solid. (Its faces labelled as the part's own, freeform and planes.)"""
+    from idealize._loader import native
+    part = wavy_drum()
+    V, F, face = shapes.tessellate_with_faces(part, 0.05)
+    types = ["freeform" if type(f.Surface).__name__ == "BSplineSurface" else "plane" for f in part.Faces]
+    assert sorted(types) == ["freeform", "plane", "plane"]
+    params = [{} if t == "freeform" else {"normal": tuple(f.Surface.Axis), "point": tuple(f.Surface.Position)}
+              for t, f in zip(types, part.Faces)]
+    brep = native.build_brep(V, F, face, types, params)
+    side = types.index("freeform")
+    assert not brep.solid and not brep.closed and brep.volume == 0
+    assert any(feature == side and "folds" in message for feature, message in brep.problems), brep.problems
+    assert brep.valid and brep.faces == 2 and brep.surface_types == {"plane": 2}
 
 
 @needs_freecad

@@ -610,14 +610,76 @@ def wavy_top():
 
 @needs_freecad
 def test_wavy_top_is_freeform():
+    """The top is one freeform feature: the pieces the curvature histogram cut it into, each fitting
+    no surface within an exact tessellation's tolerance, join, and so do the slivers along its rim
+    (before: a sphere or cylinder per piece, within the distance tolerance, and forty one-facet planes)."""
     solid = wavy_top()
-    V, F, gt, layer = layer_of(solid)
-    areas = shapes.triangle_areas(V, F)
-    assert correct_faces(layer.labels, gt, areas) == 6
-    for face, feature in zip(solid.Faces, dominant(layer, gt, areas)):
-        # The sides are surfaces of extrusion of planar curves: planes. Only the top is freeform.
-        expected = "freeform" if type(face.Surface).__name__ == "BSplineSurface" else "plane"
-        assert feature["type"] == expected
+    for V, F, gt in (shapes.tessellate_with_faces(solid, 0.05),
+                     shapes.cad_export(solid, 5e-4 * solid.BoundBox.DiagonalLength, 0.35)):
+        layer = idealize.idealize(idealize.Mesh(V, F))
+        areas = shapes.triangle_areas(V, F)
+        assert correct_faces(layer.labels, gt, areas) == 6
+        for face, feature in zip(solid.Faces, dominant(layer, gt, areas)):
+            # The sides are surfaces of extrusion of planar curves: planes. Only the top is freeform.
+            expected = "freeform" if type(face.Surface).__name__ == "BSplineSurface" else "plane"
+            assert feature["type"] == expected
+        assert len(layer.features) == 6
+
+
+def height_field_points(n, noise=0.0, seed=0):
+    """n points of z = 3 sin(x/10) cos(0.13 y) + xy/100 over [0, 50]², turned by 0.4 rad about X and
+    moved; with Gaussian noise of `noise` on each coordinate. Returns points and their plane's normals."""
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(0, 50, (n, 2))
+
+    def height(x, y):
+        return 3 * np.sin(0.1 * x) * np.cos(0.13 * y) + 0.01 * x * y
+
+    c, s = np.cos(0.4), np.sin(0.4)
+    turn = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    points = np.column_stack([xy, height(xy[:, 0], xy[:, 1])]) @ turn.T + [5, 6, 7]
+    points += rng.normal(0, noise, points.shape)
+    return points, np.tile(turn @ [0, 0, 1.0], (n, 1))
+
+
+@needs_freecad
+def test_bspline_fits_a_height_field():
+    """A smooth height field: exact samples are fitted to a small fraction of its 3 mm relief, and
+    FreeCAD's B-spline of the poles and knots passes through them where the fit's plane puts them."""
+    from idealize.freecad_solid import bspline_surface
+    points, normals = height_field_points(4000)
+    fit = native.fit_bspline_surface(points, normals, np.ones(len(points)))
+    assert fit["valid"], fit["problem"]
+    assert fit["degree"] == 3 and fit["rms"] < 1e-3 and fit["max_error"] < 5e-3
+    assert fit["poles"].shape == (len(fit["knots_u"]) + 2, len(fit["knots_v"]) + 2, 3)
+    surface = bspline_surface(points, normals)
+    relative = points[::40] - fit["origin"]
+    for p, u, v in zip(points[::40], relative @ fit["u_direction"], relative @ fit["v_direction"]):
+        q = surface.value(float(u), float(v))
+        assert np.linalg.norm(np.array([q.x, q.y, q.z]) - p) < 5e-3
+
+
+def test_bspline_fit_reaches_the_noise():
+    """Noisy samples are fitted down to the noise, on a coarser grid than exact ones (a finer one
+    would follow the noise)."""
+    points, normals = height_field_points(4000, noise=0.05)
+    exact = native.fit_bspline_surface(*height_field_points(4000), np.ones(4000))
+    fit = native.fit_bspline_surface(points, normals, np.ones(len(points)))
+    assert fit["valid"]
+    assert 0.045 < fit["rms"] < 0.065
+    assert fit["poles"].shape[0] < exact["poles"].shape[0]
+
+
+def test_bspline_fit_refuses_what_is_no_height_field():
+    """Points all round a tube fold over any plane: no surface, and the reason."""
+    t = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    z = np.repeat(np.linspace(0, 10, 10), len(t))
+    radial = np.column_stack([np.cos(np.tile(t, 10)), np.sin(np.tile(t, 10)), np.zeros(len(z))])
+    points = 5 * radial + np.column_stack([np.zeros((len(z), 2)), z])
+    fit = native.fit_bspline_surface(points, radial, np.ones(len(points)))
+    assert not fit["valid"] and "folds" in fit["problem"]
+    few = native.fit_bspline_surface(points[:10], radial[:10], np.ones(10))
+    assert not few["valid"] and "too few" in few["problem"]
 
 
 def test_single_wavy_patch_is_freeform():

@@ -3,6 +3,7 @@
 // Python after); C++ exceptions become Python exceptions. They take an optional Progress that
 // another Python thread reads and may cancel while they run.
 #include "brep_builder.h"
+#include "bspline_fitting.h"
 #include "curvature.h"
 #include "feature_layer.h"
 #include "mesh.h"
@@ -12,6 +13,7 @@
 #include "segmentation.h"
 
 #include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
@@ -435,6 +437,36 @@ PYBIND11_MODULE(_native, m) {
       },
       py::arg("type"), py::arg("points"), py::arg("normals"), py::arg("weights"),
       "Fit one surface type to points with normals and weights (the points double as the oriented samples).");
+
+  m.def(
+      "fit_bspline_surface",
+      [](const Eigen::Ref<const MatrixX3d>& points, const Eigen::Ref<const MatrixX3d>& normals,
+         const Eigen::VectorXd& weights) {
+        if (points.rows() != weights.size()) throw std::invalid_argument("points and weights must have one row per point");
+        const MatrixX3d p = points, n = normals;
+        BSplineSurfaceFit fit;
+        {
+          py::gil_scoped_release release;
+          fit = fit_bspline_surface(p, weights, n);
+        }
+        py::dict d;
+        d["valid"] = fit.valid;
+        d["problem"] = fit.problem;
+        d["degree"] = fit.degree;
+        d["knots_u"] = fit.knots_u;
+        d["knots_v"] = fit.knots_v;
+        d["poles"] = py::array_t<double>({fit.count_u, fit.count_v, 3}, fit.poles.data());
+        d["origin"] = fit.origin;
+        d["u_direction"] = fit.u_direction;
+        d["v_direction"] = fit.v_direction;
+        d["rms"] = fit.rms;
+        d["max_error"] = fit.max_error;
+        return d;
+      },
+      py::arg("points"), py::arg("normals"), py::arg("weights"),
+      "Fit a bicubic B-spline height field over the points' mean plane (a freeform patch's surface): "
+      "poles (#u x #v x 3), distinct uniform knots (clamped), the plane (S(u, v) lies over origin + u "
+      "u_direction + v v_direction), RMS and largest distance along the plane's normal.");
 
   m.def(
       "vertex_curvature",

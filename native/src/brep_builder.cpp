@@ -1,6 +1,7 @@
 #include "brep_builder.h"
 
 #include "brep_topology.h"
+#include "bspline_fitting.h"
 #include "occt_signals.h"
 
 #include <BRepAdaptor_Surface.hxx>
@@ -23,6 +24,7 @@
 #include <GeomAPI_ExtremaCurveCurve.hxx>
 #include <GeomAPI_ProjectPointOnCurve.hxx>
 #include <Geom_BSplineCurve.hxx>
+#include <Geom_BSplineSurface.hxx>
 #include <Geom_Circle.hxx>
 #include <Geom_ConicalSurface.hxx>
 #include <Geom_CylindricalSurface.hxx>
@@ -38,7 +40,10 @@
 #include <ShapeFix_Solid.hxx>
 #include <ShapeUpgrade_UnifySameDomain.hxx>
 #include <Standard_Failure.hxx>
+#include <TColStd_Array1OfInteger.hxx>
+#include <TColStd_Array1OfReal.hxx>
 #include <TColgp_Array1OfPnt.hxx>
+#include <TColgp_Array2OfPnt.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
@@ -419,13 +424,18 @@ Handle(Geom_Curve) fitted_curve(const std::vector<Vec3>& points, double tol) {
   return Handle(Geom_Curve)(fit.Curve());
 }
 
+// A feature's surface near a point: the analytic surface itself, or for a freeform feature the
+// tangent plane of its B-spline at the point's nearest point (so that closest_point, signed_distance
+// and surface_normal near that point are those of the B-spline).
+using LocalSurface = std::function<Surface(const Vec3&)>;
+
 // The points of a chain moved onto the intersection of the two surfaces (alternating projections).
-std::vector<Vec3> project_on_both(const std::vector<Vec3>& chain, const Surface& a, const Surface* b) {
+std::vector<Vec3> project_on_both(const std::vector<Vec3>& chain, const LocalSurface& a, const LocalSurface* b) {
   std::vector<Vec3> result(chain);
   for (Vec3& p : result) {
     for (int i = 0; i < (b ? 12 : 1); ++i) {
-      p = closest_point(a, p);
-      if (b) p = closest_point(*b, p);
+      p = closest_point(a(p), p);
+      if (b) p = closest_point((*b)(p), p);
     }
   }
   return result;
@@ -450,15 +460,16 @@ bool tangent_along(const Handle(Geom_Curve)& curve, const Surface& a, const Surf
 
 // The point closest (least squares) to all surfaces, starting from x0 (damped Gauss-Newton: the
 // damping keeps the point near the mesh where tangent surfaces leave a direction free).
-Vec3 corner_point(const std::vector<const Surface*>& surfaces, const Vec3& x0, double tol) {
+Vec3 corner_point(const std::vector<LocalSurface>& surfaces, const Vec3& x0, double tol) {
   Vec3 x = x0;
   const double damping = 1e-6;
   for (int iteration = 0; iteration < 30; ++iteration) {
     Eigen::Matrix3d normal = damping * Eigen::Matrix3d::Identity();
     Vec3 rhs = -damping * (x - x0);
-    for (const Surface* s : surfaces) {
-      const Vec3 n = surface_normal(*s, x);
-      const double d = signed_distance(*s, x);
+    for (const LocalSurface& local : surfaces) {
+      const Surface s = local(x);
+      const Vec3 n = surface_normal(s, x);
+      const double d = signed_distance(s, x);
       normal += n * n.transpose();
       rhs -= n * d;
     }
@@ -496,6 +507,61 @@ std::vector<Surface> corner_constraints(const std::vector<const Surface*>& surfa
 // ---------------------------------------------------------------------------------------------
 // The builder
 
+// A freeform feature's B-spline as OCCT's surface; u and v as in the fit (coordinates over its
+// mean plane).
+Handle(Geom_BSplineSurface) occt_bspline(const BSplineSurfaceFit& fit) {
+  TColgp_Array2OfPnt poles(1, fit.count_u, 1, fit.count_v);
+  for (int i = 0; i < fit.count_u; ++i)
+    for (int j = 0; j < fit.count_v; ++j) poles.SetValue(i + 1, j + 1, to_pnt(fit.poles.row(i * fit.count_v + j).transpose()));
+  auto knots = [&](const Eigen::VectorXd& k, TColStd_Array1OfReal& values, TColStd_Array1OfInteger& mults) {
+    for (Eigen::Index i = 0; i < k.size(); ++i) {
+      values.SetValue(static_cast<int>(i) + 1, k[i]);
+      mults.SetValue(static_cast<int>(i) + 1, i == 0 || i + 1 == k.size() ? fit.degree + 1 : 1);
+    }
+  };
+  const int ku = static_cast<int>(fit.knots_u.size()), kv = static_cast<int>(fit.knots_v.size());
+  TColStd_Array1OfReal u_knots(1, ku), v_knots(1, kv);
+  TColStd_Array1OfInteger u_mults(1, ku), v_mults(1, kv);
+  knots(fit.knots_u, u_knots, u_mults);
+  knots(fit.knots_v, v_knots, v_mults);
+  return new Geom_BSplineSurface(poles, u_knots, v_knots, u_mults, v_mults, fit.degree, fit.degree);
+}
+
+// A freeform feature's fitted surface, and its tangent plane nearest a point: Gauss–Newton for the
+// foot point from the point's place over the mean plane (the surface is a height field over it).
+struct FreeformSurface {
+  Handle(Geom_BSplineSurface) surface;
+  Vec3 origin, u_direction, v_direction;
+
+  Surface tangent_plane(const Vec3& p) const {
+    double u = (p - origin).dot(u_direction), v = (p - origin).dot(v_direction);
+    double u0, u1, v0, v1;
+    surface->Bounds(u0, u1, v0, v1);
+    gp_Pnt at;
+    gp_Vec du, dv;
+    for (int iteration = 0; iteration < 6; ++iteration) {
+      u = std::clamp(u, u0, u1);
+      v = std::clamp(v, v0, v1);
+      surface->D1(u, v, at, du, dv);
+      const Vec3 r = p - to_vec(at), su(du.X(), du.Y(), du.Z()), sv(dv.X(), dv.Y(), dv.Z());
+      Eigen::Matrix2d j;
+      j << su.dot(su), su.dot(sv), su.dot(sv), sv.dot(sv);
+      const Eigen::Vector2d step = j.ldlt().solve(Eigen::Vector2d(r.dot(su), r.dot(sv)));
+      if (!step.allFinite()) break;
+      u += step.x();
+      v += step.y();
+      if (step.norm() < 1e-12 * (u1 - u0 + v1 - v0)) break;
+    }
+    surface->D1(std::clamp(u, u0, u1), std::clamp(v, v0, v1), at, du, dv);
+    Surface plane;
+    plane.type = SurfaceType::Plane;
+    plane.point = to_vec(at);
+    const gp_Vec n = du.Crossed(dv);
+    plane.axis = n.Magnitude() > 0 ? Vec3(n.X(), n.Y(), n.Z()).normalized() : Vec3(u_direction.cross(v_direction));
+    return plane;
+  }
+};
+
 class BrepBuilder {
  public:
   BrepBuilder(const TriangleMesh& mesh, const std::vector<Surface>& surfaces, const BrepOptions& options)
@@ -520,6 +586,8 @@ class BrepBuilder {
                      const TopoDS_Vertex& v1, double tolerance);
   std::vector<int> dissolve_sampling_blends(const TriangleMesh& mesh, const MeshTopology& topology,
                                             std::vector<int> labels) const;
+  void fit_freeform_surfaces(const TriangleMesh& mesh, const std::vector<int>& face_feature, BrepResult& result);
+  LocalSurface local_surface(int feature) const;
   void make_vertices(const MeshTopology& topology);
   TopoDS_Vertex vertex_at_corner(int mesh_vertex) const { return vertices_.at(mesh_vertex); }
   void make_edges(BrepResult& result);
@@ -534,6 +602,7 @@ class BrepBuilder {
   const ProgressSpan progress_;
   double diagonal_ = 0, tol_ = 0, angle_eps_ = 0;
   BoundaryTopology topo_;
+  std::map<int, FreeformSurface> freeform_;  // feature -> its fitted B-spline
   std::vector<Handle(Geom_Surface)> region_surfaces_;
   std::vector<double> region_sense_;  // +1 when the surface normal points out of the part
   std::vector<char> region_winds_;    // a loop of several chains winds round the surface's axis
@@ -707,23 +776,72 @@ std::vector<int> BrepBuilder::dissolve_sampling_blends(const TriangleMesh& mesh,
   return labels;
 }
 
+// The B-spline of each freeform feature, fitted to the vertices of its faces (weighted by a third of
+// each face's area) with the face normals checking that it is a height field.
+void BrepBuilder::fit_freeform_surfaces(const TriangleMesh& mesh, const std::vector<int>& face_feature,
+                                        BrepResult& result) {
+  std::map<int, std::vector<int>> faces;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (face_feature[f] >= 0 && surfaces_[face_feature[f]].type == SurfaceType::Freeform) faces[face_feature[f]].push_back(f);
+  for (const auto& [feature, list] : faces) {
+    std::map<int, double> vertex_weight;
+    MatrixX3d normals(static_cast<Eigen::Index>(list.size()), 3);
+    for (size_t i = 0; i < list.size(); ++i) {
+      const Vec3 a = mesh.V.row(mesh.F(list[i], 0)), b = mesh.V.row(mesh.F(list[i], 1)), c = mesh.V.row(mesh.F(list[i], 2));
+      const Vec3 area_normal = 0.5 * (b - a).cross(c - a);
+      normals.row(static_cast<Eigen::Index>(i)) = area_normal.normalized().transpose();
+      for (int k = 0; k < 3; ++k) vertex_weight[mesh.F(list[i], k)] += area_normal.norm() / 3.0;
+    }
+    MatrixX3d points(static_cast<Eigen::Index>(vertex_weight.size()), 3);
+    Eigen::VectorXd weights(static_cast<Eigen::Index>(vertex_weight.size()));
+    Eigen::Index row = 0;
+    for (const auto& [v, w] : vertex_weight) {
+      points.row(row) = mesh.V.row(v);
+      weights[row++] = w;
+    }
+    const BSplineSurfaceFit fit = fit_bspline_surface(points, weights, normals);
+    if (!fit.valid) {
+      result.problems.push_back({feature, fit.problem});
+      continue;
+    }
+    try {
+      freeform_[feature] = {occt_bspline(fit), fit.origin, fit.u_direction, fit.v_direction};
+    } catch (const Standard_Failure& failure) {
+      result.problems.push_back({feature, occt_message(failure, "the B-spline surface could not be made")});
+    }
+  }
+}
+
+LocalSurface BrepBuilder::local_surface(int feature) const {
+  const auto spline = freeform_.find(feature);
+  if (spline != freeform_.end()) {
+    const FreeformSurface* f = &spline->second;
+    return [f](const Vec3& p) { return f->tangent_plane(p); };
+  }
+  const Surface* s = &surfaces_[feature];
+  return [s](const Vec3&) { return *s; };
+}
+
 void BrepBuilder::make_vertices(const MeshTopology& topology) {
   BRep_Builder builder;
   for (int v : topo_.corners) {
     std::vector<const Surface*> around;
+    std::vector<int> freeform;
     std::set<int> seen;
     for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f) {
       const int feature = topo_.region_feature[topo_.face_region[*f]];
-      if (seen.insert(feature).second && surfaces_[feature].type != SurfaceType::Freeform) {
+      if (!seen.insert(feature).second) continue;
+      if (freeform_.count(feature)) {
+        freeform.push_back(feature);
+      } else if (surfaces_[feature].type != SurfaceType::Freeform) {
         around.push_back(&surfaces_[feature]);
       }
     }
     const Vec3 x0 = mesh_.V.row(v).transpose();
-    const std::vector<Surface> constraints = corner_constraints(around, tol_);
-    std::vector<const Surface*> meeting;
-    for (const Surface& c : constraints) meeting.push_back(&c);
-    const Vec3 x = around.empty() ? x0 : corner_point(meeting, x0, tol_);
-    corner_points_[v] = x;
+    std::vector<LocalSurface> meeting;
+    for (const Surface& c : corner_constraints(around, tol_)) meeting.push_back([c](const Vec3&) { return c; });
+    for (int feature : freeform) meeting.push_back(local_surface(feature));
+    corner_points_[v] = meeting.empty() ? x0 : corner_point(meeting, x0, tol_);
   }
   // Corners that the surfaces put at one point (four features meeting where the mesh shows two
   // corners joined by a short chain) are one vertex, and the chain between them no edge.
@@ -770,17 +888,28 @@ void BrepBuilder::make_edges(BrepResult& result) {
       edge_ok_[c] = 1;
       continue;
     }
-    const Surface& a = surfaces_[topo_.region_feature[chain.left]];
-    const Surface* b = chain.right >= 0 ? &surfaces_[topo_.region_feature[chain.right]] : nullptr;
     BrepEdge& report = result.edges.emplace_back();
     report.a = topo_.region_feature[chain.left];
     report.b = chain.right >= 0 ? topo_.region_feature[chain.right] : -1;
     report.mesh_vertices = static_cast<int>(chain.vertices.size());
     report.closed = chain.closed;
-    if (a.type == SurfaceType::Freeform || (b && b->type == SurfaceType::Freeform)) continue;
+    // A freeform feature's side is its B-spline. One that has none leaves the edge to the surface
+    // on the other side alone (as on an open boundary), so that the face there is still made.
+    const auto unfitted = [&](int feature) {
+      return feature >= 0 && surfaces_[feature].type == SurfaceType::Freeform && !freeform_.count(feature);
+    };
+    const bool a_unfitted = unfitted(report.a), b_unfitted = unfitted(report.b);
+    if (a_unfitted && (report.b < 0 || b_unfitted)) continue;
+    const int feature_a = a_unfitted ? report.b : report.a;
+    const int feature_b = a_unfitted || b_unfitted ? -1 : report.b;
+    const Surface& a = surfaces_[feature_a];
+    const Surface* b = feature_b >= 0 ? &surfaces_[feature_b] : nullptr;
+    const bool analytic = a.type != SurfaceType::Freeform && (!b || b->type != SurfaceType::Freeform);
+    const LocalSurface local_a = local_surface(feature_a);
+    const LocalSurface local_b = b ? local_surface(feature_b) : LocalSurface();
     std::vector<Vec3> raw;
     for (int v : chain.vertices) raw.push_back(mesh_.V.row(v).transpose());
-    const std::vector<Vec3> points = project_on_both(raw, a, b);
+    const std::vector<Vec3> points = project_on_both(raw, local_a, b ? &local_b : nullptr);
     try {
       // A closed form is the exact answer when the chain lies near it; surfaces that touch
       // tangentially leave the mesh boundary anywhere in the zone where they are close. Surfaces
@@ -790,7 +919,7 @@ void BrepBuilder::make_edges(BrepResult& result) {
       // intersection of nearly tangent surfaces is not.
       Handle(Geom_Curve) curve;
       for (const auto& [angle_eps, gap] : {std::pair{angle_eps_, tol_}, std::pair{kNearlyParallel, 5 * tol_}}) {
-        if (b && curve.IsNull()) curve = closed_form_curve(a, *b, points, angle_eps, gap);
+        if (b && analytic && curve.IsNull()) curve = closed_form_curve(a, *b, points, angle_eps, gap);
         if (curve && max_distance_to_curve(curve, points) > (tangent_along(curve, a, *b, points) ? 0.05 * diagonal_ : 5 * tol_))
           curve.Nullify();
       }
@@ -890,8 +1019,8 @@ void BrepBuilder::make_edges(BrepResult& result) {
       if (report.curve == "fitted") {
         for (int i = 0; i <= kToleranceSamples; ++i) {
           const Vec3 p = to_vec(curve->Value(u0 + (u1 - u0) * i / kToleranceSamples));
-          edge_tolerance = std::max(edge_tolerance, 1.01 * std::abs(signed_distance(a, p)));
-          if (b) edge_tolerance = std::max(edge_tolerance, 1.01 * std::abs(signed_distance(*b, p)));
+          edge_tolerance = std::max(edge_tolerance, 1.01 * std::abs(signed_distance(local_a(p), p)));
+          if (b) edge_tolerance = std::max(edge_tolerance, 1.01 * std::abs(signed_distance(local_b(p), p)));
         }
       }
       TopoDS_Edge edge;
@@ -1009,7 +1138,7 @@ void BrepBuilder::make_faces(BrepResult& result) {
     progress.step(static_cast<double>(r) / topo_.region_loops.size());
     const int feature = topo_.region_feature[r];
     if (region_surfaces_[r].IsNull()) {
-      result.problems.push_back({feature, "freeform feature: no analytic surface, no B-spline face fitted"});
+      result.problems.push_back({feature, "freeform feature without a fitted surface: no face"});
       continue;
     }
     bool complete = true;
@@ -1139,6 +1268,13 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   // closed faces, degenerate edges at poles), then the faces are sewn: healing may replace an
   // edge in one face and not in its neighbour, and healing the whole shell at once
   // (ShapeFix_Shell) crashes on such shells in OCCT 7.6.
+  if (faces_.empty()) {  // nothing to sew: an empty compound, no solid
+    TopoDS_Compound nothing;
+    BRep_Builder().MakeCompound(nothing);
+    result.valid = true;
+    result.closed = false;
+    return nothing;
+  }
   BRepBuilderAPI_Sewing sewing(tol_);
   const ProgressSpan progress = progress_.sub("sewing", 0.83, 0.9);
   for (size_t i = 0; i < faces_.size(); ++i) {
@@ -1241,6 +1377,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   progress_.step(0.45);
 
   progress_.sub("vertices", 0.0, 1.0).step(0.5);
+  fit_freeform_surfaces(clean, face_feature, result);
   make_vertices(topology);
   // One surface per region, oriented against the mesh normals.
   const int regions = static_cast<int>(topo_.region_feature.size());
@@ -1258,7 +1395,12 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     // parametrization's u direction reverses. (A lemon whose centre circle lies within the
     // tolerance of the axis is a sphere as much as the torus's other part, which OCCT then takes.)
     const double occt_sense = s.type == SurfaceType::Torus && s.radius < -tol_ ? -1.0 : 1.0;
-    if (s.type != SurfaceType::Freeform) region_sense_[r] += occt_sense * surface_normal(s, centre).dot(area_normal);
+    if (s.type != SurfaceType::Freeform) {
+      region_sense_[r] += occt_sense * surface_normal(s, centre).dot(area_normal);
+    } else if (const auto spline = freeform_.find(topo_.region_feature[r]); spline != freeform_.end()) {
+      // The height field's normal is that of its mean plane, up to its slope.
+      region_sense_[r] += spline->second.u_direction.cross(spline->second.v_direction).dot(area_normal);
+    }
   }
   region_surfaces_.resize(regions);
   region_winds_.assign(regions, 0);
@@ -1280,7 +1422,9 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
           rounds[across]->axis.cross(round->axis).norm() <= angle_eps_)
         round->seam = rounds[across]->seam;
     }
-    region_surfaces_[r] = make_surface(surfaces_[topo_.region_feature[r]], region_points[r], round);
+    const auto spline = freeform_.find(topo_.region_feature[r]);
+    region_surfaces_[r] = spline != freeform_.end() ? Handle(Geom_Surface)(spline->second.surface)
+                                                    : make_surface(surfaces_[topo_.region_feature[r]], region_points[r], round);
   }
   make_edges(result);
   stage(result, "brep.edges", since);

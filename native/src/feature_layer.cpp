@@ -18,6 +18,7 @@
 #include <system_error>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <optional>
 #include <set>
 #include <cmath>
@@ -1051,6 +1052,55 @@ void count_faces(const Eigen::VectorXd& area, const std::vector<int>& labels, st
     }
 }
 
+// Freeform features that meet smoothly are pieces of one surface (the curvature histogram cuts a
+// freeform surface where its curvature passes a valley): adjacent freeform features join where the
+// border between them turns (the median turn between facets across it) no more sharply than the
+// facets inside either at their sharpest. So does a feature too small for its fit to say anything
+// (fewer than kInteriorPoints vertices: a CAD export's slivers where the freeform face meets its
+// neighbours) that meets a freeform one so. Returns whether any feature joined.
+bool join_freeform_features(const TriangleMesh& mesh, const MeshTopology& topology, std::vector<int>& labels,
+                            std::vector<Feature>& features) {
+  const auto freeform = [&](int p) { return features[p].type == SurfaceType::Freeform; };
+  const auto joins = [&](int p) { return freeform(p) || features[p].vertices < kInteriorPoints; };
+  bool any = false;
+  // Slivers lie in rows along a border: each pass takes the row beside the freeform feature.
+  for (bool joined = true; joined;) {
+    joined = false;
+    std::vector<double> inside(features.size(), 0.0);
+    std::map<std::pair<int, int>, std::vector<double>> across;
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(f, c);
+        if (g < f || labels[f] < 0 || labels[g] < 0) continue;
+        const int a = labels[f], b = labels[g];
+        if (!joins(a) || !joins(b)) continue;
+        double turn = std::acos(std::clamp(face_normal(mesh, f).dot(face_normal(mesh, g)), -1.0, 1.0));
+        if (!std::isfinite(turn)) turn = M_PI;
+        if (a == b) inside[a] = std::max(inside[a], turn);
+        else if (freeform(a) || freeform(b)) across[{std::min(a, b), std::max(a, b)}].push_back(turn);
+      }
+    std::vector<int> parent(features.size());
+    std::iota(parent.begin(), parent.end(), 0);
+    const std::function<int(int)> root = [&](int p) { return parent[p] == p ? p : parent[p] = root(parent[p]); };
+    for (auto& [pair, turns] : across) {
+      const auto [a, b] = pair;
+      std::nth_element(turns.begin(), turns.begin() + turns.size() / 2, turns.end());
+      if (turns[turns.size() / 2] > std::max(inside[a], inside[b])) continue;
+      const int ra = root(a), rb = root(b);
+      if (ra == rb) continue;
+      // The larger freeform feature stands for the group.
+      const bool a_stands = freeform(ra) && (!freeform(rb) || features[ra].area >= features[rb].area);
+      if (a_stands) parent[rb] = ra; else parent[ra] = rb;
+      joined = any = true;
+    }
+    if (!joined) break;
+    for (int& l : labels)
+      if (l >= 0) l = root(l);
+    compact_features(labels, features);
+  }
+  return any;
+}
+
 void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
                       const std::vector<Feature>& features, double tolerance, FeatureLayer& layer,
                       const ProgressSpan& progress) {
@@ -1532,10 +1582,13 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
     typical = std::max(residuals[residuals.size() / 2], floor);
   }
+  // An exact tessellation has neither noise nor undulation: beyond the tolerance, a surface is not
+  // the patch's, however large the patch.
   for (Feature& f : layer.features)
-    if (f.spread > options.freeform_ratio * typical && f.spread > layer.distance_tolerance &&
-        f.spread > options.freeform_relative_size * std::sqrt(f.area))
+    if (f.spread > options.freeform_ratio * typical && f.spread > (exact_mesh ? exact_distance : layer.distance_tolerance) &&
+        (exact_mesh || f.spread > options.freeform_relative_size * std::sqrt(f.area)))
       f.type = SurfaceType::Freeform;
+  if (join_freeform_features(mesh, topology, layer.labels, layer.features)) count_faces(area, layer.labels, layer.features);
   stage("classify");
   progress.sub("relations", 0.98, 0.99).step(0.0);
 
