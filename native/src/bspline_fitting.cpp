@@ -147,7 +147,11 @@ BSplineSurfaceFit fit_bspline_surface(const MatrixX3d& points, const Eigen::Vect
   BSplineSurfaceFit result;
   const Eigen::Index count = points.rows();
   const double total = weights.size() == count ? weights.sum() : 0.0;
-  if (count < (kDegree + 1) * (kDegree + 1) || !(total > 0.0) || !points.allFinite()) {
+  if (!points.allFinite() || !normals.allFinite() || !(total > 0.0)) {
+    result.problem = "points or normals not finite, or no positive weight: no B-spline surface";
+    return result;
+  }
+  if (count < (kDegree + 1) * (kDegree + 1)) {
     result.problem = "too few points for a B-spline surface";
     return result;
   }
