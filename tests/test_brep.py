@@ -158,6 +158,31 @@ def test_freeform_top_becomes_a_bspline_face(export, tmp_path):
     assert face.Area > part.Faces[[type(f.Surface).__name__ for f in part.Faces].index("BSplineSurface")].Area
 
 
+def test_a_ball_corner_of_an_open_shell_is_kept():
+    """Three fillets meeting in a ball, on a box whose bottom is missing: the shell cannot close, so
+    each face must pass the boolean operations' check to be kept. The ball's rims are circles that
+    are no parallels of its sphere, whose pcurves are approximations: the edges' tolerances must
+    cover them, or the ball is dropped (as nist_ftc_06's two balls were)."""
+    from idealize._loader import native
+    part = shapes.corner_blend_box()
+    V, F, face = shapes.tessellate_with_faces(part, 0.01)
+    bottom = [i for i, f in enumerate(part.Faces) if f.BoundBox.ZMax < 1e-9]
+    assert len(bottom) == 1
+    keep = face != bottom[0]
+    types, params = [], []
+    for f in part.Faces:
+        s = f.Surface
+        kind = {"Plane": "plane", "Cylinder": "cylinder", "Sphere": "sphere"}[type(s).__name__]
+        types.append(kind)
+        params.append({"normal": tuple(s.Axis), "point": tuple(s.Position)} if kind == "plane" else
+                      {"axis": tuple(s.Axis), "point": tuple(s.Center), "radius": s.Radius} if kind == "cylinder" else
+                      {"center": tuple(s.Center), "radius": s.Radius})
+    brep = native.build_brep(V, F[keep], face[keep], types, params)
+    assert not brep.solid and brep.valid
+    assert brep.surface_types == {"plane": 5, "cylinder": 3, "sphere": 1}, brep.problems
+    assert [message for _, message in brep.problems] == ["the faces do not close into a solid (free edges remain)"]
+
+
 def wavy_drum():
     """A drum lofted through three closed B-spline curves of radius 15 ± 1.5 (three waves): a
     freeform side all round its axis, between two planes."""

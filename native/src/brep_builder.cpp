@@ -13,6 +13,7 @@
 #include <BRepCheck_ListIteratorOfListOfStatus.hxx>
 #include <BRepCheck_Result.hxx>
 #include <BRepGProp.hxx>
+#include <BRepLib_CheckCurveOnSurface.hxx>
 #include <BRepTools_WireExplorer.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
@@ -47,6 +48,7 @@
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 #include <TopoDS_Edge.hxx>
@@ -1274,6 +1276,26 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     result.valid = true;
     result.closed = false;
     return nothing;
+  }
+  // An edge's tolerance must cover its pcurves too: a circle on a sphere that is no parallel (a
+  // ball corner's rim) gets an approximated pcurve that strays from the circle by more than the
+  // exact circle's tolerance, which BRepCheck accepts and the boolean operations' check does not.
+  BRep_Builder tolerances;
+  for (const TopoDS_Face& face : faces_) {
+    for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) {
+      const TopoDS_Edge& edge = TopoDS::Edge(e.Current());
+      try {
+        OCC_CATCH_SIGNALS
+        BRepLib_CheckCurveOnSurface check(edge, face);
+        check.Perform();
+        if (!check.IsDone() || !(check.MaxDistance() > BRep_Tool::Tolerance(edge))) continue;
+        const double tolerance = 1.01 * check.MaxDistance();
+        tolerances.UpdateEdge(edge, tolerance);
+        for (TopExp_Explorer v(edge, TopAbs_VERTEX); v.More(); v.Next())
+          tolerances.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
+      } catch (const Standard_Failure&) {
+      }
+    }
   }
   BRepBuilderAPI_Sewing sewing(tol_);
   const ProgressSpan progress = progress_.sub("sewing", 0.83, 0.9);
