@@ -235,16 +235,4 @@ BSplineSurfaceFit fit_bspline_surface(const MatrixX3d& points, const Eigen::Vect
   return result;
 }
 
-Eigen::Vector3d evaluate(const BSplineSurfaceFit& surface, double u, double v) {
-  const int spans_u = surface.count_u - kDegree, spans_v = surface.count_v - kDegree;
-  const std::vector<double> ku = full_knots(surface.knots_u[0], surface.knots_u[spans_u], spans_u);
-  const std::vector<double> kv = full_knots(surface.knots_v[0], surface.knots_v[spans_v], spans_v);
-  std::array<double, kDegree + 1> bu{}, bv{};
-  const int iu = basis(ku, spans_u, u, bu), iv = basis(kv, spans_v, v, bv);
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  for (int a = 0; a <= kDegree; ++a)
-    for (int b = 0; b <= kDegree; ++b) p += bu[a] * bv[b] * surface.poles.row((iu + a) * surface.count_v + iv + b).transpose();
-  return p;
-}
-
 }  // namespace idealize

@@ -58,7 +58,4 @@ struct BSplineSurfaceFit {
 BSplineSurfaceFit fit_bspline_surface(const MatrixX3d& points, const Eigen::VectorXd& weights,
                                       const MatrixX3d& normals, const BSplineFitOptions& options = {});
 
-// The surface's point at (u, v), both within its knot range.
-Eigen::Vector3d evaluate(const BSplineSurfaceFit& surface, double u, double v);
-
 }  // namespace idealize

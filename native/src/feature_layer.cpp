@@ -284,6 +284,12 @@ bool explains_every_point(const Surface& surface, const PatchPoints& data, doubl
   return true;
 }
 
+// The angle between the normals of faces f and g (π for a degenerate face).
+double facet_turn(const TriangleMesh& mesh, int f, int g) {
+  const double turn = std::acos(std::clamp(face_normal(mesh, f).dot(face_normal(mesh, g)), -1.0, 1.0));
+  return std::isfinite(turn) ? turn : M_PI;
+}
+
 // The sharpest turn between the facets of each pair of adjacent patches, in radians, keyed (a, b)
 // with a < b; with `inside`, also the sharpest turn inside each patch, keyed (p, p).
 std::map<std::pair<int, int>, double> boundary_turns(const TriangleMesh& mesh, const MeshTopology& topology,
@@ -293,9 +299,8 @@ std::map<std::pair<int, int>, double> boundary_turns(const TriangleMesh& mesh, c
     for (int c = 0; c < 3; ++c) {
       const int g = topology.face_neighbor(f, c);
       if (g < f || labels[f] < 0 || labels[g] < 0 || (labels[f] == labels[g] && !inside)) continue;
-      const double turn = std::acos(std::clamp(face_normal(mesh, f).dot(face_normal(mesh, g)), -1.0, 1.0));
       double& t = turns[{std::min(labels[f], labels[g]), std::max(labels[f], labels[g])}];
-      t = std::max(t, std::isfinite(turn) ? turn : M_PI);
+      t = std::max(t, facet_turn(mesh, f, g));
     }
   return turns;
 }
@@ -1074,8 +1079,7 @@ bool join_freeform_features(const TriangleMesh& mesh, const MeshTopology& topolo
         if (g < f || labels[f] < 0 || labels[g] < 0) continue;
         const int a = labels[f], b = labels[g];
         if (!joins(a) || !joins(b)) continue;
-        double turn = std::acos(std::clamp(face_normal(mesh, f).dot(face_normal(mesh, g)), -1.0, 1.0));
-        if (!std::isfinite(turn)) turn = M_PI;
+        const double turn = facet_turn(mesh, f, g);
         if (a == b) inside[a] = std::max(inside[a], turn);
         else if (freeform(a) || freeform(b)) across[{std::min(a, b), std::max(a, b)}].push_back(turn);
       }
