@@ -396,6 +396,29 @@ def test_fillets_of_the_benchmarks_blended_corner_scan():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_fillets_beside_tori_of_the_benchmarks_boxblend_scan():
+    """The benchmark's scan of as_bb_boxblend_03: two fillets along x end in small torus blends of
+    their radius, which a cylinder explains near their tangent border. Grown from a disc, each
+    fillet's region crept into the torus and its refit bent towards it, until it held neither;
+    growth now stops at the last region its surface fitted. Each fillet is one cylinder of the
+    part's radius along x, holding the face."""
+    m = shapes.benchmark_mesh("as_bb_boxblend_03.stp", "scan")
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    areas = shapes.triangle_areas(m.V, m.F)
+    found = dominant(layer, m.gt, areas)
+    along_x = [face for face, kind in enumerate(m.face_types) if kind == "Cylinder" and found[face] is not None
+               and found[face]["type"] == "cylinder" and abs(found[face]["params"]["radius"] / 5 - 1) < 0.01
+               and axis_angle(found[face]["params"]["axis"], [1, 0, 0]) < np.radians(0.5)]
+    correct = 0
+    for face in along_x:
+        inside, held = m.gt == face, layer.labels == found[face]["id"]
+        correct += (areas[inside & held].sum() >= 0.8 * areas[inside].sum() and
+                    areas[inside & held].sum() >= 0.8 * areas[held].sum())
+    assert correct == 4, (along_x, correct)
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_chamfer_pieces_of_the_benchmarks_sculpted_nut_are_coaxial_cones():
     """The benchmark's sculpted occt_Pump_Nut: a narrow piece of the chamfer cone fits a sphere as
     well as its cone, and identification prefers spheres to cones; about the bore's axis only the

@@ -869,7 +869,9 @@ double bend(const Surface& surface, const FitData& data) {
 // the larger of the mesh's noise and the fit's spread), refitted as it doubles. Regions of at least
 // `min_region_faces` faces get new ids from `next_id` on; the faces no region took are labelled by
 // label_remainder (a corner ball between fillets, a small boss on a plate), and the reassignment
-// that follows moves rim faces to the surfaces that explain them.
+// that follows moves rim faces to the surfaces that explain them. A growing region's refit that no
+// longer fits within `fits_below` (and has drifted by more than the noise from its disc's fit) ends
+// its growth at the last region that did.
 int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
                         double normal_noise, double fits_below, int min_region_faces,
                         const std::function<Feature(const PatchPoints&)>& identify_points, const FitOptions& fit_options,
@@ -957,17 +959,28 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
     // The disc's faces that the surface does not explain leave it; the rest grows.
     for (int f : region) in_region[f] = explains(f);
     region.erase(std::remove_if(region.begin(), region.end(), [&](int f) { return !in_region[f]; }), region.end());
+    // A refit that no longer fits (the region crept over a neighbouring surface that it explains
+    // near their tangent border, and the refit bent towards it) ends growth at the last region
+    // that fitted.
+    const double disc_rms = feature.rms;
+    Feature fitting = feature;
+    size_t fitting_size = region.size();
+    bool overgrown = false;
     auto refit = [&] {
       const SurfaceFit fit = fit_surface(feature.type, all_points(region), fit_options, &feature.surface);
       if (fit.valid) feature.set_fit(fit);
       fitted = region.size();
+      overgrown = !fits(feature) && feature.rms > disc_rms + noise;
+      if (overgrown) return;
+      fitting = feature;
+      fitting_size = region.size();
     };
     // When growth stops, the surface refitted to all it took may explain more (a disc across a
     // narrow fillet fixes its radius only roughly): growth resumes while refits add to it.
-    for (;;) {
-      for (size_t head = 0; head < region.size(); ++head) {
+    while (!overgrown) {
+      for (size_t head = 0; head < region.size() && !overgrown; ++head) {
         progress.poll(++visited, 1 << 12);
-        for (int c = 0; c < 3; ++c) {
+        for (int c = 0; c < 3 && !overgrown; ++c) {
           const int g = topology.face_neighbor(region[head], c);
           if (g < 0 || labels[g] != patch || in_region[g] || !explains(g)) continue;
           in_region[g] = 1;
@@ -975,8 +988,13 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
           if (region.size() >= 2 * fitted) refit();  // refit as the region doubles
         }
       }
-      if (region.size() <= fitted + fitted / 8) break;  // (bounded rounds: each grows it by an eighth)
+      if (overgrown || region.size() <= fitted + fitted / 8) break;  // (bounded rounds: each grows it by an eighth)
       refit();
+    }
+    if (overgrown) {  // (breadth-first: the first faces of the region are connected)
+      for (size_t i = fitting_size; i < region.size(); ++i) in_region[region[i]] = 0;
+      region.resize(fitting_size);
+      feature = fitting;
     }
     for (int f : region) in_region[f] = 0;
     if (static_cast<int>(region.size()) < min_region_faces) continue;
