@@ -401,6 +401,21 @@ def test_small_fillets_stay_and_sampled_edges_go(name, variant, volume_error):
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_sculpted_box_gives_its_six_faces():
+    """The benchmark's sculpted as_box: the undulation bends two of its sides so that each came out
+    as two planes 1° apart, with no crease between them, whose common plane strays from the smaller
+    piece by more than the distance tolerance. They pass through their border as closely as through
+    their own points (no step), so they are one plane: the solid is the box's six planes."""
+    m = shapes.benchmark_mesh("as_box.stp", "sculpt")
+    truth = shapes.benchmark_truth("as_box.stp")
+    solid = idealize.make_solid(idealize.idealize(Mesh(m.V, m.F)))
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == truth["surface_types"] == {"plane": 6}
+    assert abs(solid.volume / truth["volume"] - 1) < 2e-2
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_faces_at_odd_angles_keep_their_direction():
     """The benchmark's scan of as_isolated_blends_test_12 has vertical faces at 25.4 and 4.8 degrees
     from the part's axes, within the angle tolerance of its ideal directions: snapped, they no longer

@@ -305,6 +305,32 @@ std::map<std::pair<int, int>, double> boundary_turns(const TriangleMesh& mesh, c
   return turns;
 }
 
+// Whether the mesh vertices on the border between patches a and b lie, at the median, within
+// `distance_a` of a's surface and `distance_b` of b's: two planes of a face that undulates meet
+// where their patches meet, while the two levels of a step do not.
+bool surfaces_meet_at_border(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
+                             int a, int b, const Surface& sa, const Surface& sb, double distance_a, double distance_b) {
+  std::vector<double> da, db;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (labels[f] != a) continue;
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(f, c);
+      if (g < 0 || labels[g] != b) continue;
+      for (int k : {1, 2}) {  // the edge opposite corner c
+        const Eigen::Vector3d v = mesh.V.row(mesh.F(f, (c + k) % 3)).transpose();
+        da.push_back(std::abs(signed_distance(sa, v)));
+        db.push_back(std::abs(signed_distance(sb, v)));
+      }
+    }
+  }
+  if (da.empty()) return false;
+  auto median = [](std::vector<double>& x) {
+    std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+    return x[x.size() / 2];
+  };
+  return median(da) <= distance_a && median(db) <= distance_b;
+}
+
 // The pairs of patches (a, b) with a < b that share a mesh edge.
 std::vector<std::pair<int, int>> adjacent_pairs(const TriangleMesh& mesh, const MeshTopology& topology,
                                                 const std::vector<int>& labels) {
@@ -582,8 +608,10 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
                          std::abs(fa.surface.axis.dot(fb.surface.axis)) < std::cos(angle_tolerance) &&
                          equal_radii(fa, fb, tolerance, options.radius_tolerance);
     // Two planes that meet at less than the angle tolerance without a crease (no facet turns more
-    // across their border than inside either) are one plane where it explains each part (below: not
-    // a step): a sculpted face's undulation bends it by more than its pieces' fits allow a merge,
+    // across their border than inside either) are one plane where it explains each part, or where
+    // both pass through their border as closely as through their own points (below: not a step): a
+    // sculpted face's undulation bends it by more than its pieces' fits allow a merge, and a large
+    // face by more than the distance tolerance (the sculpted box's sides, in two planes 1° apart),
     // but not by an edge. Idealization would make them parallel, and so, sharing a border, coplanar.
     const auto border = turns.find({std::min(a, b), std::max(a, b)});
     const bool one_plane = same_type && fa.type == SurfaceType::Plane &&
@@ -600,7 +628,10 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
         for (const auto& [part, own] : {std::pair{&pa, &fa}, std::pair{&pb, &fb}}) {
           double rms, max_error;
           fit_residuals(u.surface, part->points, part->weights, rms, max_error);
-          if (rms > options.residual_ratio * std::max(own->rms, noise) + tolerance) return false;
+          if (rms > options.residual_ratio * std::max(own->rms, noise) + tolerance)
+            return one_plane && u.type == SurfaceType::Plane &&
+                   surfaces_meet_at_border(mesh, topology, labels, a, b, fa.surface, fb.surface,
+                                           std::max(tolerance, fa.max_error), std::max(tolerance, fb.max_error));
         }
         return true;
       }
