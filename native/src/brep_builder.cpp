@@ -1251,6 +1251,44 @@ std::string shell_face_fault(const TopoDS_Shape& face) {
   return analyzer.HasFaulty() ? "its edges cross each other or leave its surface" : "";
 }
 
+// Two edges of a wire that meet tangentially (a fillet's arc running into a larger arc) cross once
+// more beside their common vertex wherever that vertex lies a little off their exact point of
+// tangency, which BRepCheck takes for a self-intersecting wire unless the vertex's tolerance covers
+// the crossing. Raises it to do so for crossings within `reach` of the vertex.
+void cover_tangent_crossings(const TopoDS_Face& face, double reach) {
+  BRep_Builder builder;
+  for (TopExp_Explorer w(face, TopAbs_WIRE); w.More(); w.Next()) {
+    std::vector<TopoDS_Edge> edges;
+    for (BRepTools_WireExplorer e(TopoDS::Wire(w.Current()), face); e.More(); e.Next()) edges.push_back(e.Current());
+    for (size_t i = 0; i < edges.size() && edges.size() > 1; ++i) {
+      const TopoDS_Edge &a = edges[i], &b = edges[(i + 1) % edges.size()];
+      TopoDS_Vertex v;
+      if (!TopExp::CommonVertex(a, b, v)) continue;
+      double a0, a1, b0, b1;
+      const Handle(Geom_Curve) ca = BRep_Tool::Curve(a, a0, a1), cb = BRep_Tool::Curve(b, b0, b1);
+      if (ca.IsNull() || cb.IsNull()) continue;
+      gp_Pnt pa, pb;
+      gp_Vec ta, tb;
+      ca->D1(BRep_Tool::Parameter(v, a), pa, ta);
+      cb->D1(BRep_Tool::Parameter(v, b), pb, tb);
+      if (ta.Magnitude() <= 0.0 || tb.Magnitude() <= 0.0 || ta.Crossed(tb).Magnitude() > 0.1 * ta.Magnitude() * tb.Magnitude())
+        continue;  // not tangent (beyond about 6°): no second crossing near the vertex
+      GeomAPI_ExtremaCurveCurve extrema(ca, cb, a0, a1, b0, b1);
+      const gp_Pnt centre = BRep_Tool::Pnt(v);
+      const double touching = BRep_Tool::Tolerance(a) + BRep_Tool::Tolerance(b);
+      double cover = BRep_Tool::Tolerance(v);
+      for (int n = 1; n <= extrema.NbExtrema(); ++n) {
+        if (extrema.Distance(n) > touching) continue;
+        gp_Pnt p, q;
+        extrema.Points(n, p, q);
+        const double away = std::max(centre.Distance(p), centre.Distance(q)) + touching;
+        if (away <= reach) cover = std::max(cover, 1.01 * away);
+      }
+      if (cover > BRep_Tool::Tolerance(v)) builder.UpdateVertex(v, cover);
+    }
+  }
+}
+
 // An edge used by one face only (seams, used twice by their face, and degenerate edges aside).
 bool has_free_edges(const TopoDS_Shape& shape) {
   TopTools_IndexedDataMapOfShapeListOfShape faces_of_edge;
@@ -1294,6 +1332,13 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
           tolerances.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
       } catch (const Standard_Failure&) {
       }
+    }
+  }
+  for (const TopoDS_Face& face : faces_) {
+    try {
+      OCC_CATCH_SIGNALS
+      cover_tangent_crossings(face, tol_);
+    } catch (const Standard_Failure&) {
     }
   }
   BRepBuilderAPI_Sewing sewing(tol_);

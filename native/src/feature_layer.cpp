@@ -1537,6 +1537,14 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   progress.sub("classify", 0.975, 0.98).step(0.0);
   undo_inexact_splits(mesh, area, labels, was_split, kExactFraction * layer.distance_tolerance, identify_points, curvature,
                       layer.features, layer.labels);
+  // On an exact tessellation the reassignment may have left a facet of a piece that merging placed
+  // (a long facet beside a fillet's tangent border, whose piece's other facets went to the fillet):
+  // it joins the neighbour whose surface passes through its vertices exactly. (After the undoing,
+  // which counts such facets as a sign of a freeform surface; and not within the tolerance, which
+  // would give the small pieces of a freeform surface to the planes beside it.)
+  if (exact_mesh)
+    absorb_fragments(mesh, topology, patch_points(mesh, layer.labels, static_cast<int>(layer.features.size())),
+                     exact_distance, layer.features, layer.labels);
   compact_features(layer.labels, layer.features);
   count_faces(area, layer.labels, layer.features);
 
