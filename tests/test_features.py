@@ -419,6 +419,29 @@ def test_fillets_beside_tori_of_the_benchmarks_boxblend_scan():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_sculpted_fillet_in_two_pieces_is_one_cylinder():
+    """The benchmark's sculpted as_3boxesblend_05: its fillet of r 0.4 along y came out in two
+    pieces whose axes the undulation turns 1.5° apart; each fits its own cylinder three times better
+    than both fit one (which still explains each within the tolerance), so they did not merge, and
+    the B-rep edge between the two near-coincident surfaces broke both faces. Alike pieces (one type,
+    parallel, one radius) that meet without a crease now merge where one surface explains each:
+    the fillet is one cylinder, holding its face."""
+    m = shapes.benchmark_mesh("as_3boxesblend_05.step", "sculpt")
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    areas = shapes.triangle_areas(m.V, m.F)
+    fillets = [f for f in layer.features if f["type"] == "cylinder" and abs(f["params"]["radius"] / 0.4 - 1) < 0.05
+               and axis_angle(f["params"]["axis"], [0, 1, 0]) < np.radians(5)]
+    assert len(fillets) == 1, fillets
+    found = dominant(layer, m.gt, areas)
+    faces = [face for face, f in enumerate(found) if f is not None and f["id"] == fillets[0]["id"]]
+    assert faces and all(m.face_types[face] == "Cylinder" for face in faces)
+    inside, held = np.isin(m.gt, faces), layer.labels == fillets[0]["id"]
+    assert areas[inside & held].sum() >= 0.8 * areas[inside].sum()
+    assert areas[inside & held].sum() >= 0.8 * areas[held].sum()
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_chamfer_pieces_of_the_benchmarks_sculpted_nut_are_coaxial_cones():
     """The benchmark's sculpted occt_Pump_Nut: a narrow piece of the chamfer cone fits a sphere as
     well as its cone, and identification prefers spheres to cones; about the bore's axis only the

@@ -517,6 +517,20 @@ bool shatter_fragments(const TriangleMesh& mesh, const std::vector<PatchPoints>&
   return any;
 }
 
+// Whether two features may be pieces of one surface by their parameters: one type, parallel axes,
+// radii that relations would take for equal (cones: half-angles within the angle tolerance); or a
+// zone of a torus between two parallels, which a cone or cylinder about its axis fits.
+bool alike(const Feature& a, const Feature& b, double angle_tolerance, double distance_tolerance, double radius_tolerance) {
+  if (a.type == SurfaceType::Freeform || b.type == SurfaceType::Freeform) return false;
+  auto zone = [](SurfaceType t) { return t == SurfaceType::Cone || t == SurfaceType::Cylinder; };
+  const bool torus_zone = (a.type == SurfaceType::Torus && zone(b.type)) || (b.type == SurfaceType::Torus && zone(a.type));
+  if (a.type != b.type && !torus_zone) return false;
+  if (a.surface.has_direction() && std::abs(a.surface.axis.dot(b.surface.axis)) < std::cos(angle_tolerance)) return false;
+  if (torus_zone) return true;
+  if (a.type == SurfaceType::Cone) return std::abs(a.surface.half_angle - b.surface.half_angle) <= angle_tolerance;
+  return a.type == SurfaceType::Plane || equal_radii(a, b, distance_tolerance, radius_tolerance);
+}
+
 // Merges adjacent patches whose union one surface fits as well as each part alone: a fillet or a
 // cylinder that segmentation split along the facet folds of a coarse tessellation. Patches of one
 // type are refitted together; a patch too small to have interior vertices may also join a
@@ -607,20 +621,22 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     const bool sectors = !exact && same_type && fa.type == SurfaceType::Cylinder &&
                          std::abs(fa.surface.axis.dot(fb.surface.axis)) < std::cos(angle_tolerance) &&
                          equal_radii(fa, fb, tolerance, options.radius_tolerance);
-    // Two planes that meet at less than the angle tolerance without a crease (no facet turns more
-    // across their border than inside either) are one plane where it explains each part, or where
-    // both pass through their border as closely as through their own points (below: not a step): a
-    // sculpted face's undulation bends it by more than its pieces' fits allow a merge, and a large
-    // face by more than the distance tolerance (the sculpted box's sides, in two planes 1° apart),
-    // but not by an edge. Idealization would make them parallel, and so, sharing a border, coplanar.
+    // Two alike pieces (planes within the angle tolerance; coaxial cylinders of one radius, and so
+    // on) that meet without a crease (no facet turns more across their border than inside either)
+    // are one surface where it explains each part (below), or, planes, where both pass through their
+    // border as closely as through their own points (not a step): a sculpted face's undulation bends
+    // it by more than its pieces' fits allow a merge (a sculpted fillet in two pieces 1.5° apart),
+    // and a large face by more than the distance tolerance (the sculpted box's sides, in two planes
+    // 1° apart), but not by an edge. Idealization would make such planes parallel, and so, sharing a
+    // border, coplanar.
     const auto border = turns.find({std::min(a, b), std::max(a, b)});
-    const bool one_plane = same_type && fa.type == SurfaceType::Plane &&
-                           std::abs(fa.surface.axis.dot(fb.surface.axis)) >= std::cos(angle_tolerance) &&
-                           border != turns.end() && border->second <= std::max(inside_turn(a), inside_turn(b));
+    const bool one_surface = same_type && alike(fa, fb, angle_tolerance, tolerance, options.radius_tolerance) &&
+                             border != turns.end() && border->second <= std::max(inside_turn(a), inside_turn(b));
+    const bool one_plane = one_surface && fa.type == SurfaceType::Plane;
     const PatchPoints both = concatenate(pa, pb);
     auto accepted = [&](const Feature& u) {
       if (u.type == SurfaceType::Freeform) return false;
-      if (!(!exact && one_plane && u.type == SurfaceType::Plane) && (u.rms > limit || u.normal_rms > normal_limit))
+      if (!(!exact && one_surface && u.type == fa.type) && (u.rms > limit || u.normal_rms > normal_limit))
         return false;
       if (!exact) {
         // An RMS over the union hides a small foreign part (a pocket's wall in a large plane, whose
@@ -1604,19 +1620,10 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       std::set<std::pair<int, int>> apart;
       touched.resize(layer.features.size(), 0);
       const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
-      auto alike = [&](const Feature& a, const Feature& b) {
-        if (a.type == SurfaceType::Freeform || b.type == SurfaceType::Freeform) return false;
-        // A zone of a torus between two parallels, which a cone or cylinder about its axis fits.
-        auto zone = [](SurfaceType t) { return t == SurfaceType::Cone || t == SurfaceType::Cylinder; };
-        const bool torus_zone = (a.type == SurfaceType::Torus && zone(b.type)) || (b.type == SurfaceType::Torus && zone(a.type));
-        if (a.type != b.type && !torus_zone) return false;
-        if (a.surface.has_direction() && std::abs(a.surface.axis.dot(b.surface.axis)) < std::cos(angle_tolerance)) return false;
-        if (torus_zone) return true;
-        if (a.type == SurfaceType::Cone) return std::abs(a.surface.half_angle - b.surface.half_angle) <= angle_tolerance;
-        return a.type == SurfaceType::Plane || equal_radii(a, b, layer.distance_tolerance, options.radius_tolerance);
-      };
       for (const auto& pair : beside)
-        if ((touched[pair.first] && touched[pair.second]) || !alike(layer.features[pair.first], layer.features[pair.second]))
+        if ((touched[pair.first] && touched[pair.second]) ||
+            !alike(layer.features[pair.first], layer.features[pair.second], angle_tolerance, layer.distance_tolerance,
+                   options.radius_tolerance))
           apart.insert(pair);
       if (merge_patches(mesh, topology, settled, identify_points, options, layer.distance_tolerance, false, exact_distance,
                         noise, layer.features, layer.labels, apart, progress.sub("remerge", 0.98, 0.98))) {
