@@ -442,6 +442,23 @@ def test_sculpted_fillet_in_two_pieces_is_one_cylinder():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_pieces_of_a_narrow_fillet_do_not_flatten_into_a_plane():
+    """The benchmark's scaling mesh (nist_ftc_06 scanned, 84k triangles): two pieces of a fillet of
+    r 3.175 merged into one cylinder whose refit flattened to a radius of 20 m, which then grew over
+    half of the plane beside it. A curved union still keeps to the normals' limit: the large planes
+    are planes, and no cylinder is wider than the part."""
+    m = shapes.bench_module("datasets").scaling_mesh(75000)
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    areas = shapes.triangle_areas(m.V, m.F)
+    found = dominant(layer, m.gt, areas)
+    for face, kind in enumerate(m.face_types):
+        if kind == "Plane" and (m.gt == face).sum() > 1000:
+            assert found[face]["type"] == "plane", (face, found[face])
+    assert all(f["params"]["radius"] < m.diag for f in layer.features if f["type"] == "cylinder")
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_chamfer_pieces_of_the_benchmarks_sculpted_nut_are_coaxial_cones():
     """The benchmark's sculpted occt_Pump_Nut: a narrow piece of the chamfer cone fits a sphere as
     well as its cone, and identification prefers spheres to cones; about the bore's axis only the

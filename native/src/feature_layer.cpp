@@ -636,8 +636,10 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     const PatchPoints both = concatenate(pa, pb);
     auto accepted = [&](const Feature& u) {
       if (u.type == SurfaceType::Freeform) return false;
-      if (!(!exact && one_surface && u.type == fa.type) && (u.rms > limit || u.normal_rms > normal_limit))
-        return false;
+      // (A curved union keeps to the normals' limit: the refit of two pieces of a narrow fillet may
+      // flatten into a cylinder of 20 m, which then grows over the plane beside it.)
+      const bool loose = !exact && one_surface && u.type == fa.type;
+      if ((!loose && u.rms > limit) || (!(loose && one_plane) && u.normal_rms > normal_limit)) return false;
       if (!exact) {
         // An RMS over the union hides a small foreign part (a pocket's wall in a large plane, whose
         // RMS then lets the next one in).
