@@ -572,7 +572,7 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
   const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
   for (size_t i = 0; i < pairs.size(); ++i) {
     progress.step(static_cast<double>(i) / pairs.size());
-    const auto [a, b] = pairs[i];
+    const int a = pairs[i].first, b = pairs[i].second;  // (not a structured binding: lambdas below capture them)
     if (rejected.count({a, b})) continue;  // neither changed since
     const Feature &fa = features[a], &fb = features[b];
     const PatchPoints &pa = points[a], &pb = points[b];
