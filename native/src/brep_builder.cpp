@@ -1404,12 +1404,12 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
       ShapeUpgrade_UnifySameDomain unify(shape, Standard_True, Standard_True, Standard_False);
       unify.SetLinearTolerance(tol_ * 1e-3);
       unify.Build();
-      result.valid = BRepCheck_Analyzer(unify.Shape()).IsValid();
-      if (result.valid || !BRepCheck_Analyzer(shape).IsValid()) return unify.Shape();
+      result.valid = BRepCheck_Analyzer(unify.Shape(), Standard_True, Standard_True).IsValid();
+      if (result.valid || !BRepCheck_Analyzer(shape, Standard_True, Standard_True).IsValid()) return unify.Shape();
     } catch (const Standard_Failure&) {
     }
   }
-  result.valid = BRepCheck_Analyzer(shape).IsValid();
+  result.valid = BRepCheck_Analyzer(shape, Standard_True, Standard_True).IsValid();
   return shape;
 }
 
@@ -1532,7 +1532,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     }
     if (dropped || !result.valid) {  // the sewn shell when it is valid and every face is kept
       shape = kept_faces;
-      result.valid = BRepCheck_Analyzer(shape).IsValid();  // what is returned: the valid faces
+      result.valid = BRepCheck_Analyzer(shape, Standard_True, Standard_True).IsValid();  // what is returned: the valid faces
     }
   }
   if (!result.closed) result.problems.push_back({-1, "the faces do not close into a solid (free edges remain)"});

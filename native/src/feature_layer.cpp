@@ -39,6 +39,38 @@ namespace {
 
 constexpr int kNone = -1;
 constexpr int kSeveral = -2;
+
+// Runs work(i) for each i of `items` on two threads (this runs on machines of two cores or more),
+// dealing them out in turn: put the largest first. Each work(i) writes only what is item i's own,
+// so the result does not depend on the threads. `step(k)` (k of the items done) runs on the
+// calling thread; it reports progress and may throw to cancel.
+template <class Work, class Step>
+void on_two_threads(const std::vector<int>& items, const Work& work, const Step& step) {
+  auto every_other = [&](size_t first) {
+    for (size_t k = first; k < items.size(); k += 2) {
+      if (first == 0) step(k);
+      work(items[k]);
+    }
+  };
+  std::future<void> second;
+  try {
+    second = std::async(std::launch::async, every_other, 1);
+  } catch (const std::system_error&) {  // no thread to be had: all on this one
+    second = std::async(std::launch::deferred, every_other, 1);
+  }
+  every_other(0);  // should it throw (cancelled), leaving waits for the other thread
+  second.get();
+}
+
+// The patches p with which[p] (#which <= #points), the largest (most points) first.
+std::vector<int> largest_first(const std::vector<FitData>& points, const std::vector<char>& which) {
+  std::vector<int> order;
+  for (size_t p = 0; p < which.size() && p < points.size(); ++p)
+    if (which[p]) order.push_back(static_cast<int>(p));
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int x, int y) { return points[x].points.rows() > points[y].points.rows(); });
+  return order;
+}
 // Fits use a patch's interior vertices when it has at least this many: enough for a torus (seven
 // parameters) with noise.
 constexpr int kInteriorPoints = 24;
@@ -1281,30 +1313,14 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   auto identify_points = [&](const PatchPoints& pp, const PatchCurvature& c) {
     return identify(pp, c, zero_mean_curvature, options, layer.distance_tolerance);
   };
-  // On two threads (this runs on machines of two cores or more), the largest patches first and
-  // dealt out in turn; each patch's fit is its own, so the result does not depend on the threads.
+  // Each patch's fit is its own: on two threads.
   auto identify_all = [&](const std::vector<PatchPoints>& points, const std::vector<char>& which,
                           const ProgressSpan& span) {
     layer.features.resize(points.size());
-    std::vector<int> order;
-    for (size_t p = 0; p < points.size(); ++p)
-      if (which[p]) order.push_back(static_cast<int>(p));
-    std::stable_sort(order.begin(), order.end(),
-                     [&](int x, int y) { return points[x].points.rows() > points[y].points.rows(); });
-    auto identify_every_other = [&](size_t first) {
-      for (size_t i = first; i < order.size(); i += 2) {
-        if (first == 0) span.step(static_cast<double>(i) / order.size());  // reports and cancels
-        layer.features[order[i]] = identify_points(points[order[i]], curvature[order[i]]);
-      }
-    };
-    std::future<void> second;
-    try {
-      second = std::async(std::launch::async, identify_every_other, 1);
-    } catch (const std::system_error&) {  // no thread to be had: all on this one
-      second = std::async(std::launch::deferred, identify_every_other, 1);
-    }
-    identify_every_other(0);  // should it throw (cancelled), leaving waits for the other thread
-    second.get();
+    const std::vector<int> order = largest_first(points, which);
+    on_two_threads(
+        order, [&](int p) { layer.features[p] = identify_points(points[p], curvature[p]); },
+        [&](size_t k) { span.step(static_cast<double>(k) / order.size()); });
   };
   std::vector<PatchPoints> points = patch_points(mesh, layer.labels, num_patches);
   identify_all(points, std::vector<char>(num_patches, 1), progress.sub(0.01, 0.06));
@@ -1323,14 +1339,17 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   // Refits the surfaces of the patches that changed (same type, starting from the previous fit) to
   // `points`.
   auto refit_changed = [&](const std::vector<char>& changed, const ProgressSpan& span) {
-    const int patches = static_cast<int>(layer.features.size());
-    for (int p = 0; p < patches; ++p) {
-      span.step(static_cast<double>(p) / patches);
-      Feature& f = layer.features[p];
-      if (!changed[p] || f.type == SurfaceType::Freeform) continue;
-      const SurfaceFit fit = fit_surface(f.type, points[p], options.fit, &f.surface);
-      if (fit.valid) f.set_fit(fit);
-    }
+    std::vector<char> which = changed;
+    for (size_t p = 0; p < which.size(); ++p) which[p] &= layer.features[p].type != SurfaceType::Freeform;
+    const std::vector<int> order = largest_first(points, which);
+    on_two_threads(
+        order,
+        [&](int p) {
+          Feature& f = layer.features[p];
+          const SurfaceFit fit = fit_surface(f.type, points[p], options.fit, &f.surface);
+          if (fit.valid) f.set_fit(fit);
+        },
+        [&](size_t k) { span.step(static_cast<double>(k) / order.size()); });
   };
   // Rounds stop early when nothing moves: each round takes its share of the span.
   auto reassign = [&](const ProgressSpan& span) {
@@ -1596,18 +1615,20 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         for (size_t p = 0; p < changed.size(); ++p) touched[p] |= changed[p];
       if (std::find(changed.begin(), changed.end(), 1) == changed.end()) continue;
       const std::vector<PatchPoints> now = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
-      for (size_t p = 0; p < layer.features.size(); ++p) {
-        if (!changed[p]) continue;
-        Feature& f = layer.features[p];
-        SurfaceFit fit;
-        if (p < existing) fit = fit_surface(f.type, now[p], options.fit, &f.surface);
-        if (!fit.valid) {
-          fit = fit_of(f.surface, now[p]);
-          measure_spreads(now[p], fit);
-        }
-        f.set_fit(fit);
-        f.vertices = static_cast<int>(now[p].points.rows());
-      }
+      on_two_threads(
+          largest_first(now, changed),
+          [&](int p) {
+            Feature& f = layer.features[p];
+            SurfaceFit fit;
+            if (static_cast<size_t>(p) < existing) fit = fit_surface(f.type, now[p], options.fit, &f.surface);
+            if (!fit.valid) {
+              fit = fit_of(f.surface, now[p]);
+              measure_spreads(now[p], fit);
+            }
+            f.set_fit(fit);
+            f.vertices = static_cast<int>(now[p].points.rows());
+          },
+          [](size_t) {});
       count_faces(area, layer.labels, layer.features);
     }
     // A surface that the stages between merging and here left in two pieces (a sculpted cylinder
