@@ -383,6 +383,24 @@ def test_cad_mesh_of_the_benchmarks_largest_part_gives_its_solid():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_shell_of_a_part_that_does_not_close_keeps_only_sound_tolerances():
+    """The benchmark's sculpted as_ANC101 does not close. On one edge OpenCASCADE's curve-on-surface
+    check returned a distance of 3.5 m for a pcurve on this 0.5 m part, which became the tolerance
+    of the edge's vertices; the face holding them was kept, with a vertex that covered the part (on
+    a variant of the part the check returned 1e154, and the self-intersection check then never
+    returned). No such tolerance is taken now, and no kept face has one."""
+    m = shapes.benchmark_mesh("as_ANC101.stp", "sculpt")
+    solid = idealize.make_solid(idealize.idealize(Mesh(m.V, m.F)))
+    assert not solid.solid and solid.problems
+    shape = solid.part_shape()
+    diagonal = shape.BoundBox.DiagonalLength
+    assert shape.Faces and 0 < diagonal < 2 * np.linalg.norm(m.V.max(axis=0) - m.V.min(axis=0))
+    assert max(v.Tolerance for v in shape.Vertexes) < diagonal
+    assert max(e.Tolerance for e in shape.Edges) < diagonal
+
+
+@needs_freecad
+@shapes.needs_shared_data
 @pytest.mark.parametrize("name", ["as_isolated_blends_test_12.stp", "as_customblend_05.step"])
 def test_benchmarks_cad_mesh_keeps_slivers_and_narrow_bands(name):
     """The benchmark's CAD tessellations: as_isolated_blends_test_12 has a step of 0.03 mm (two

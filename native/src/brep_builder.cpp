@@ -1236,8 +1236,14 @@ std::string invalid_reason(const TopoDS_Shape& face) {
 // Why a face of a shell that did not close cannot be kept (empty: it can). Its edges may cross
 // themselves or leave the surface, or its boundary run the wrong way round (the face would cover the
 // rest of a torus: its area comes out negative), which BRepCheck passes but OpenCASCADE's mesher
-// (and every modelling operation) chokes on: the mesher never returned on such a torus face.
-std::string shell_face_fault(const TopoDS_Shape& face) {
+// (and every modelling operation) chokes on: the mesher never returned on such a torus face. A
+// vertex or edge whose tolerance exceeds `size` (the part's) is no geometry at all, and the
+// self-intersection check never returned on one.
+std::string shell_face_fault(const TopoDS_Shape& face, double size) {
+  for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next())
+    if (!(BRep_Tool::Tolerance(TopoDS::Edge(e.Current())) <= size)) return "an edge's tolerance exceeds the part";
+  for (TopExp_Explorer v(face, TopAbs_VERTEX); v.More(); v.Next())
+    if (!(BRep_Tool::Tolerance(TopoDS::Vertex(v.Current())) <= size)) return "a vertex's tolerance exceeds the part";
   if (!BRepCheck_Analyzer(face).IsValid()) return invalid_reason(face);
   GProp_GProps area;
   BRepGProp::SurfaceProperties(face.Oriented(TopAbs_FORWARD), area);
@@ -1325,7 +1331,9 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
         OCC_CATCH_SIGNALS
         BRepLib_CheckCurveOnSurface check(edge, face);
         check.Perform();
-        if (!check.IsDone() || !(check.MaxDistance() > BRep_Tool::Tolerance(edge))) continue;
+        // (A distance beyond the part's size is the check failing: no tolerance to take from it.)
+        if (!check.IsDone() || !(check.MaxDistance() > BRep_Tool::Tolerance(edge)) || !(check.MaxDistance() <= diagonal_))
+          continue;
         const double tolerance = 1.01 * check.MaxDistance();
         tolerances.UpdateEdge(edge, tolerance);
         for (TopExp_Explorer v(edge, TopAbs_VERTEX); v.More(); v.Next())
@@ -1512,7 +1520,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     builder.MakeCompound(kept_faces);
     bool dropped = false;
     for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
-      const std::string reason = shell_face_fault(e.Current());
+      const std::string reason = shell_face_fault(e.Current(), diagonal_);
       if (reason.empty()) {
         builder.Add(kept_faces, e.Current());
       } else {
