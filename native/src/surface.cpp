@@ -14,6 +14,18 @@ Eigen::Vector3d unit_or(const Eigen::Vector3d& v, const Eigen::Vector3d& fallbac
   return n > 0.0 ? Eigen::Vector3d(v / n) : fallback;
 }
 
+// The height and distance of axial_coordinates without the radial direction, which distances
+// alone do not need: model fitting evaluates them millions of times.
+struct HeightDistance {
+  double height, distance;
+};
+
+HeightDistance height_distance(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d q = p - origin;
+  const double height = q.dot(axis);
+  return {height, (q - height * axis).norm()};
+}
+
 }  // namespace
 
 const char* surface_type_name(SurfaceType type) {
@@ -57,12 +69,12 @@ void signed_distances(const Surface& s, const Eigen::Vector3d* p, size_t n, doub
       for (size_t i = 0; i < n; ++i) out[i] = (p[i] - s.point).norm() - s.radius;
       return;
     case SurfaceType::Cylinder:
-      for (size_t i = 0; i < n; ++i) out[i] = axial_coordinates(s.point, s.axis, p[i]).distance - s.radius;
+      for (size_t i = 0; i < n; ++i) out[i] = height_distance(s.point, s.axis, p[i]).distance - s.radius;
       return;
     case SurfaceType::Cone: {
       const double cos_angle = std::cos(s.half_angle), sin_angle = std::sin(s.half_angle);
       for (size_t i = 0; i < n; ++i) {
-        const AxialCoordinates c = axial_coordinates(s.point, s.axis, p[i]);
+        const HeightDistance c = height_distance(s.point, s.axis, p[i]);
         const double across = c.distance * cos_angle - c.height * sin_angle;
         const double along = c.distance * sin_angle + c.height * cos_angle;
         // Behind the apex the apex itself is closest.
@@ -72,7 +84,7 @@ void signed_distances(const Surface& s, const Eigen::Vector3d* p, size_t n, doub
     }
     case SurfaceType::Torus:
       for (size_t i = 0; i < n; ++i) {
-        const AxialCoordinates c = axial_coordinates(s.point, s.axis, p[i]);
+        const HeightDistance c = height_distance(s.point, s.axis, p[i]);
         const double radial = c.distance - s.radius;
         out[i] = std::sqrt(radial * radial + c.height * c.height) - s.minor;
       }

@@ -269,10 +269,10 @@ Surface refine(Surface surface, const Sample& s, const std::vector<double>& w, i
   std::vector<double> d(n), sqrt_w(n);
   for (int i = 0; i < n; ++i) sqrt_w[i] = std::sqrt(w[i]);
   double current = cost(surface, s, w, d);
+  std::vector<double> d_current = d;  // distances to `surface`, kept from the accepted step's cost
   double lambda = 1e-3;
   for (int it = 0; it < max_iterations; ++it) {
-    signed_distances(surface, s.p.data(), n, d.data());
-    for (int i = 0; i < n; ++i) residual[i] = sqrt_w[i] * d[i];
+    for (int i = 0; i < n; ++i) residual[i] = sqrt_w[i] * d_current[i];
     for (int j = 0; j < k; ++j) {
       double step[7] = {0, 0, 0, 0, 0, 0, 0};
       step[j] = kStep;
@@ -292,6 +292,7 @@ Surface refine(Surface surface, const Sample& s, const std::vector<double>& w, i
         const double decrease = current - next;
         surface = candidate;
         current = next;
+        d_current.swap(d);
         lambda = std::max(lambda * 0.3, 1e-12);
         improved = decrease > 1e-10 * current;
         break;
