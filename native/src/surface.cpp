@@ -14,18 +14,6 @@ Eigen::Vector3d unit_or(const Eigen::Vector3d& v, const Eigen::Vector3d& fallbac
   return n > 0.0 ? Eigen::Vector3d(v / n) : fallback;
 }
 
-// The height and distance of axial_coordinates without the radial direction, which distances
-// alone do not need: model fitting evaluates them millions of times.
-struct HeightDistance {
-  double height, distance;
-};
-
-HeightDistance height_distance(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d q = p - origin;
-  const double height = q.dot(axis);
-  return {height, (q - height * axis).norm()};
-}
-
 }  // namespace
 
 const char* surface_type_name(SurfaceType type) {
@@ -60,34 +48,99 @@ void orthonormal_frame(const Eigen::Vector3d& axis, Eigen::Vector3d& e1, Eigen::
   e2 = axis.cross(e1);
 }
 
+namespace {
+
+// Signed distances of a point (x, y, z) relative to the surface's point, the operations in the order
+// Eigen's expressions use (results equal to the bit: the fits are chaotic enough to need that).
+struct Distances {
+  explicit Distances(const Surface& s)
+      : ax(s.axis.x()), ay(s.axis.y()), az(s.axis.z()), radius(s.radius), minor(s.minor),
+        cos_angle(std::cos(s.half_angle)), sin_angle(std::sin(s.half_angle)) {}
+
+  double height(double x, double y, double z) const { return (x * ax + y * ay) + z * az; }
+  // Distance from the axis, given the height along it.
+  double off_axis(double x, double y, double z, double h) const {
+    const double rx = x - h * ax, ry = y - h * ay, rz = z - h * az;
+    return std::sqrt((rx * rx + ry * ry) + rz * rz);
+  }
+  static double length(double x, double y, double z) { return std::sqrt((x * x + y * y) + z * z); }
+
+  double sphere(double x, double y, double z) const { return length(x, y, z) - radius; }
+  double cylinder(double x, double y, double z) const { return off_axis(x, y, z, height(x, y, z)) - radius; }
+  double torus(double x, double y, double z) const {
+    const double h = height(x, y, z);
+    const double radial = off_axis(x, y, z, h) - radius;
+    return std::sqrt(radial * radial + h * h) - minor;
+  }
+  // The distance across a cone's generators; `along` < 0 behind the apex, where the apex is closest.
+  double cone_across(double x, double y, double z, double& along) const {
+    const double h = height(x, y, z);
+    const double d = off_axis(x, y, z, h);
+    along = d * sin_angle + h * cos_angle;
+    return d * cos_angle - h * sin_angle;
+  }
+  double cone(double x, double y, double z) const {
+    double along;
+    const double across = cone_across(x, y, z, along);
+    return along >= 0.0 ? across : std::copysign(length(x, y, z), across);
+  }
+
+  double ax, ay, az, radius, minor, cos_angle, sin_angle;
+};
+
+// Over arrays of x, y and z the compiler computes two distances per instruction: points go through
+// in chunks of this many.
+constexpr size_t kChunk = 256;
+
+struct Chunk {
+  double x[kChunk], y[kChunk], z[kChunk];
+};
+
+template <class Kernel>
+void in_chunks(const Eigen::Vector3d& origin, const Eigen::Vector3d* p, size_t n, double* out, Kernel kernel) {
+  Chunk c;
+  for (size_t start = 0; start < n; start += kChunk) {
+    const size_t m = std::min(kChunk, n - start);
+    for (size_t i = 0; i < m; ++i) {
+      c.x[i] = p[start + i].x() - origin.x();
+      c.y[i] = p[start + i].y() - origin.y();
+      c.z[i] = p[start + i].z() - origin.z();
+    }
+    kernel(c, m, out + start);
+  }
+}
+
+}  // namespace
+
 void signed_distances(const Surface& s, const Eigen::Vector3d* p, size_t n, double* out) {
+  const Distances d(s);
   switch (s.type) {
     case SurfaceType::Plane:
-      for (size_t i = 0; i < n; ++i) out[i] = (p[i] - s.point).dot(s.axis);
+      for (size_t i = 0; i < n; ++i) out[i] = (p[i] - s.point).dot(s.axis);  // no square root: as fast in place
       return;
     case SurfaceType::Sphere:
-      for (size_t i = 0; i < n; ++i) out[i] = (p[i] - s.point).norm() - s.radius;
+      in_chunks(s.point, p, n, out, [&](const Chunk& c, size_t m, double* o) {
+        for (size_t i = 0; i < m; ++i) o[i] = d.sphere(c.x[i], c.y[i], c.z[i]);
+      });
       return;
     case SurfaceType::Cylinder:
-      for (size_t i = 0; i < n; ++i) out[i] = height_distance(s.point, s.axis, p[i]).distance - s.radius;
+      in_chunks(s.point, p, n, out, [&](const Chunk& c, size_t m, double* o) {
+        for (size_t i = 0; i < m; ++i) o[i] = d.cylinder(c.x[i], c.y[i], c.z[i]);
+      });
       return;
     case SurfaceType::Cone: {
-      const double cos_angle = std::cos(s.half_angle), sin_angle = std::sin(s.half_angle);
-      for (size_t i = 0; i < n; ++i) {
-        const HeightDistance c = height_distance(s.point, s.axis, p[i]);
-        const double across = c.distance * cos_angle - c.height * sin_angle;
-        const double along = c.distance * sin_angle + c.height * cos_angle;
-        // Behind the apex the apex itself is closest.
-        out[i] = along >= 0.0 ? across : std::copysign((p[i] - s.point).norm(), across);
-      }
+      double along[kChunk];
+      in_chunks(s.point, p, n, out, [&](const Chunk& c, size_t m, double* o) {
+        for (size_t i = 0; i < m; ++i) o[i] = d.cone_across(c.x[i], c.y[i], c.z[i], along[i]);
+        for (size_t i = 0; i < m; ++i)
+          if (along[i] < 0.0) o[i] = std::copysign(Distances::length(c.x[i], c.y[i], c.z[i]), o[i]);
+      });
       return;
     }
     case SurfaceType::Torus:
-      for (size_t i = 0; i < n; ++i) {
-        const HeightDistance c = height_distance(s.point, s.axis, p[i]);
-        const double radial = c.distance - s.radius;
-        out[i] = std::sqrt(radial * radial + c.height * c.height) - s.minor;
-      }
+      in_chunks(s.point, p, n, out, [&](const Chunk& c, size_t m, double* o) {
+        for (size_t i = 0; i < m; ++i) o[i] = d.torus(c.x[i], c.y[i], c.z[i]);
+      });
       return;
     case SurfaceType::Freeform:
       std::fill(out, out + n, 0.0);
@@ -96,9 +149,16 @@ void signed_distances(const Surface& s, const Eigen::Vector3d* p, size_t n, doub
 }
 
 double signed_distance(const Surface& s, const Eigen::Vector3d& p) {
-  double d;
-  signed_distances(s, &p, 1, &d);
-  return d;
+  const Eigen::Vector3d q = p - s.point;
+  switch (s.type) {
+    case SurfaceType::Plane: return q.dot(s.axis);
+    case SurfaceType::Sphere: return Distances(s).sphere(q.x(), q.y(), q.z());
+    case SurfaceType::Cylinder: return Distances(s).cylinder(q.x(), q.y(), q.z());
+    case SurfaceType::Cone: return Distances(s).cone(q.x(), q.y(), q.z());
+    case SurfaceType::Torus: return Distances(s).torus(q.x(), q.y(), q.z());
+    case SurfaceType::Freeform: return 0.0;
+  }
+  return 0.0;
 }
 
 Eigen::Vector3d surface_normal(const Surface& s, const Eigen::Vector3d& p) {

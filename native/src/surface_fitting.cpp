@@ -350,8 +350,11 @@ void fit_residuals(const Surface& surface, const MatrixX3d& points, const Eigen:
                    double& rms, double& max_error) {
   double sum = 0.0, total = 0.0;
   max_error = 0.0;
+  // Row-major rows of three doubles are an array of points.
+  std::vector<double> distance(points.rows());
+  signed_distances(surface, reinterpret_cast<const Eigen::Vector3d*>(points.data()), distance.size(), distance.data());
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    const double d = signed_distance(surface, points.row(i).transpose());
+    const double d = distance[i];
     sum += weights[i] * d * d;
     total += weights[i];
     max_error = std::max(max_error, std::abs(d));
