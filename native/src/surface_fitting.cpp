@@ -363,15 +363,33 @@ void fit_residuals(const Surface& surface, const MatrixX3d& points, const Eigen:
 }
 
 double weighted_median(std::vector<std::pair<double, double>> values) {
-  std::sort(values.begin(), values.end());
+  if (values.empty()) return 0.0;
   double total = 0.0;
   for (const auto& v : values) total += v.second;
-  double running = 0.0;
-  for (const auto& v : values) {
-    running += v.second;
-    if (running >= 0.5 * total) return v.first;
+  const double half = 0.5 * total;
+  // The first value in ascending order at which the running weight reaches half the total: halve the
+  // range that holds it around its middle value (expected linear time), then sort what is left.
+  constexpr std::ptrdiff_t kSorted = 32;
+  auto low = values.begin(), high = values.end();
+  double below = 0.0;  // the weight before `low`
+  while (high - low > kSorted) {
+    const auto middle = low + (high - low) / 2;
+    std::nth_element(low, middle, high);
+    double through = below;
+    for (auto v = low; v <= middle; ++v) through += v->second;
+    if (through >= half) {
+      high = middle + 1;
+    } else {
+      below = through;
+      low = middle + 1;
+    }
   }
-  return values.empty() ? 0.0 : values.back().first;
+  std::sort(low, high);
+  for (auto v = low; v != high; ++v) {
+    below += v->second;
+    if (below >= half) return v->first;
+  }
+  return std::max_element(values.begin(), values.end())->first;  // weights that are not numbers
 }
 
 namespace {
