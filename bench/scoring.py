@@ -24,9 +24,10 @@ from typing import Dict, List
 import numpy as np
 
 THRESHOLD = 0.8
+MIN_FACE_FRACTION = 0.0005  # faces under this share of the surface are too small to score
 
 
-def score(labels, gt, areas, min_face_fraction: float = 0.0005, threshold: float = THRESHOLD) -> Dict:
+def score(labels, gt, areas, min_face_fraction: float = MIN_FACE_FRACTION, threshold: float = THRESHOLD) -> Dict:
     """Scores predicted patch ids `labels` against ground-truth face ids `gt`, one per triangle,
     weighting triangles by `areas`.
 

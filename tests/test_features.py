@@ -447,7 +447,7 @@ def test_pieces_of_a_narrow_fillet_do_not_flatten_into_a_plane():
     r 3.175 merged into one cylinder whose refit flattened to a radius of 20 m, which then grew over
     half of the plane beside it. A curved union still keeps to the normals' limit: the large planes
     are planes, and no cylinder is wider than the part."""
-    m = shapes.bench_module("datasets").scaling_mesh(75000)
+    m = shapes.bench_module("datasets").scaling_mesh(75000, calibrated=False)
     layer = idealize.idealize(idealize.Mesh(m.V, m.F))
     areas = shapes.triangle_areas(m.V, m.F)
     found = dominant(layer, m.gt, areas)
