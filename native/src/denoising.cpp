@@ -1,5 +1,7 @@
 #include "denoising.h"
 
+#include "parallel.h"
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -66,19 +68,25 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
   // Preparing the kernels costs about as much as one filtering pass: it is polled as well.
   std::vector<int> offsets, ring;
   face_rings(mesh, topology, offsets, ring, progress.sub(0.0, 0.07));
-  std::vector<double> normal_jumps, distances(ring.size());
-  normal_jumps.reserve(ring.size());
-  double centroid_distance = 0.0;
+  // `spatial` holds the normal jumps until it holds the spatial weights.
+  std::vector<double> normal_jumps, distances(ring.size()), spatial(ring.size());
+  std::vector<double>& jumps = spatial;
   const ProgressSpan measuring = progress.sub(0.07, 0.14);
-  for_each_polled(nf, measuring, [&](int f) {
+  for_each_polled_on_two_threads(nf, measuring, [&](int f) {
     for (int k = offsets[f]; k < offsets[f + 1]; ++k) {
       distances[k] = (g.centroid.row(f) - g.centroid.row(ring[k])).norm();
-      if (ring[k] == f) continue;
-      centroid_distance += distances[k];
-      const double jump = (g.normal.row(f) - g.normal.row(ring[k])).norm();
-      if (jump > kCoplanar) normal_jumps.push_back(jump);
+      jumps[k] = (g.normal.row(f) - g.normal.row(ring[k])).norm();
     }
   });
+  // The sum in one order: the same kernel whatever the threads did.
+  double centroid_distance = 0.0;
+  normal_jumps.reserve(ring.size());
+  for (int f = 0; f < nf; ++f)
+    for (int k = offsets[f]; k < offsets[f + 1]; ++k) {
+      if (ring[k] == f) continue;
+      centroid_distance += distances[k];
+      if (jumps[k] > kCoplanar) normal_jumps.push_back(jumps[k]);
+    }
   if (normal_jumps.empty()) return g.normal;  // a flat mesh: nothing to filter
   centroid_distance /= static_cast<double>(ring.size() - nf);
   auto middle = normal_jumps.begin() + normal_jumps.size() / 2;
@@ -87,9 +95,8 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
   if (!(sigma_range > 0.0) || !(centroid_distance > 0.0)) return g.normal;
 
   progress.step(0.16);
-  std::vector<double> spatial(ring.size());
   const ProgressSpan weighting = progress.sub(0.16, 0.2);
-  for_each_polled(static_cast<int>(ring.size()), weighting, [&](int k) {
+  for_each_polled_on_two_threads(static_cast<int>(ring.size()), weighting, [&](int k) {
     spatial[k] = g.area[ring[k]] * std::exp(-distances[k] * distances[k] / (2.0 * centroid_distance * centroid_distance));
   }, 1 << 18);
 
@@ -99,7 +106,7 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
     // A pass over a million faces takes over a second: poll inside it.
     const ProgressSpan pass = progress.sub(0.2 + 0.8 * it / options.normal_iterations,
                                            0.2 + 0.8 * (it + 1) / options.normal_iterations);
-    for_each_polled(nf, pass, [&](int f) {
+    for_each_polled_on_two_threads(nf, pass, [&](int f) {
       Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
       for (int k = offsets[f]; k < offsets[f + 1]; ++k) {
         const int h = ring[k];
@@ -115,24 +122,27 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
   return normals;
 }
 
-// Moves each vertex so that its faces agree with the filtered normals (Zheng et al., eq. 7).
+// Moves each vertex so that its faces agree with the filtered normals (Zheng et al., eq. 7). Each
+// vertex gathers its faces' pulls in the order of the faces (as its list of faces holds them).
 MatrixX3d positions_fitting_normals(const TriangleMesh& mesh, const MeshTopology& topology,
                                     const MatrixX3d& normals, int iterations, const ProgressSpan& progress) {
-  MatrixX3d V = mesh.V, delta(V.rows(), 3);
+  MatrixX3d V = mesh.V, next(V.rows(), 3), centroid(mesh.num_faces(), 3);
+  const int nv = static_cast<int>(V.rows());
   for (int it = 0; it < iterations; ++it) {
-    progress.step(static_cast<double>(it) / iterations);
-    delta.setZero();
-    for (int f = 0; f < mesh.num_faces(); ++f) {
-      const Eigen::RowVector3d centroid = (V.row(mesh.F(f, 0)) + V.row(mesh.F(f, 1)) + V.row(mesh.F(f, 2))) / 3.0;
-      for (int c = 0; c < 3; ++c) {
-        const int v = mesh.F(f, c);
-        delta.row(v) += normals.row(f).dot(centroid - V.row(v)) * normals.row(f);
-      }
-    }
-    for (int v = 0; v < V.rows(); ++v) {
+    const ProgressSpan pass = progress.sub(static_cast<double>(it) / iterations, static_cast<double>(it + 1) / iterations);
+    for_each_polled_on_two_threads(mesh.num_faces(), pass.sub(0.0, 0.3), [&](int f) {
+      centroid.row(f) = (V.row(mesh.F(f, 0)) + V.row(mesh.F(f, 1)) + V.row(mesh.F(f, 2))) / 3.0;
+    });
+    for_each_polled_on_two_threads(nv, pass.sub(0.3, 1.0), [&](int v) {
       const int count = topology.vertex_face_count(v);
-      if (count > 0 && !topology.is_boundary_vertex(v)) V.row(v) += delta.row(v) / count;
-    }
+      next.row(v) = V.row(v);
+      if (count == 0 || topology.is_boundary_vertex(v)) return;
+      Eigen::RowVector3d delta = Eigen::RowVector3d::Zero();
+      for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f)
+        delta += normals.row(*f).dot(centroid.row(*f) - V.row(v)) * normals.row(*f);
+      next.row(v) += delta / count;
+    });
+    V.swap(next);
   }
   return V;
 }

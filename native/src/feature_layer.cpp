@@ -4,6 +4,7 @@
 #include "edge_fillets.h"
 #include "feature_graph.h"
 #include "idealization.h"
+#include "parallel.h"
 #include "shared_axes.h"
 #include "tangent_boundaries.h"
 
@@ -14,8 +15,6 @@
 #include <array>
 #include <chrono>
 #include <functional>
-#include <future>
-#include <system_error>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -40,28 +39,6 @@ namespace {
 constexpr int kNone = -1;
 constexpr int kSeveral = -2;
 
-// Runs work(i) for each i of `items` on two threads (this runs on machines of two cores or more),
-// dealing them out in turn: put the largest first. Each work(i) writes only what is item i's own,
-// so the result does not depend on the threads. `step(k)` (k of the items done) runs on the
-// calling thread; it reports progress and may throw to cancel.
-template <class Work, class Step>
-void on_two_threads(const std::vector<int>& items, const Work& work, const Step& step) {
-  auto every_other = [&](size_t first) {
-    for (size_t k = first; k < items.size(); k += 2) {
-      if (first == 0) step(k);
-      work(items[k]);
-    }
-  };
-  std::future<void> second;
-  try {
-    second = std::async(std::launch::async, every_other, 1);
-  } catch (const std::system_error&) {  // no thread to be had: all on this one
-    second = std::async(std::launch::deferred, every_other, 1);
-  }
-  every_other(0);  // should it throw (cancelled), leaving waits for the other thread
-  second.get();
-}
-
 // The patches p with which[p] (#which <= #points), the largest (most points) first.
 std::vector<int> largest_first(const std::vector<FitData>& points, const std::vector<char>& which) {
   std::vector<int> order;
@@ -71,6 +48,7 @@ std::vector<int> largest_first(const std::vector<FitData>& points, const std::ve
                    [&](int x, int y) { return points[x].points.rows() > points[y].points.rows(); });
   return order;
 }
+
 // Fits use a patch's interior vertices when it has at least this many: enough for a torus (seven
 // parameters) with noise.
 constexpr int kInteriorPoints = 24;

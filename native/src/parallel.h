@@ -1,0 +1,52 @@
+// Work on the two cores a machine running this has at least: each item writes only what is its
+// own, so results do not depend on the threads. Progress is reported and cancellation polled on the
+// calling thread only.
+#pragma once
+
+#include "progress.h"
+
+#include <future>
+#include <system_error>
+#include <vector>
+
+namespace idealize {
+
+// Runs first_half(0) here and first_half(1) on a second thread (or here after it when no thread can
+// be had), and waits for both. Should the first throw (cancelled), leaving waits for the second.
+template <class Half>
+void on_two_threads(const Half& half) {
+  std::future<void> second;
+  try {
+    second = std::async(std::launch::async, half, 1);
+  } catch (const std::system_error&) {
+    second = std::async(std::launch::deferred, half, 1);
+  }
+  half(0);
+  second.get();
+}
+
+// Runs work(i) for each i of `items`, dealing them out in turn: put the largest first. `step(k)`
+// (k of the items done) runs on the calling thread; it reports progress and may throw to cancel.
+template <class Work, class Step>
+void on_two_threads(const std::vector<int>& items, const Work& work, const Step& step) {
+  on_two_threads([&](size_t first) {
+    for (size_t k = first; k < items.size(); k += 2) {
+      if (first == 0) step(k);
+      work(items[k]);
+    }
+  });
+}
+
+// for_each_polled (progress.h) on two threads: blocks of `block` items in turn.
+template <class Body>
+void for_each_polled_on_two_threads(int count, const ProgressSpan& progress, const Body& body, int block = 1 << 14) {
+  on_two_threads([&](size_t first) {
+    for (int begin = static_cast<int>(first) * block; begin < count; begin += 2 * block) {
+      if (first == 0) progress.step(static_cast<double>(begin) / count);
+      const int end = count - begin > block ? begin + block : count;
+      for (int i = begin; i < end; ++i) body(i);
+    }
+  });
+}
+
+}  // namespace idealize
