@@ -11,7 +11,7 @@
 
 namespace idealize {
 
-// Runs first_half(0) here and first_half(1) on a second thread (or here after it when no thread can
+// Runs half(0) here and half(1) on a second thread (or here after it when no thread can
 // be had), and waits for both. Should the first throw (cancelled), leaving waits for the second.
 template <class Half>
 void on_two_threads(const Half& half) {
