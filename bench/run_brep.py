@@ -221,7 +221,8 @@ def markdown(results: Dict) -> str:
 
     row("valid closed solid", lambda x: f"{x['solid']}/{x['meshes']}")
     row("... with the ground truth's surface-type histogram", lambda x: f"{x['types_equal']}/{x['meshes']}")
-    row("... or with that of its faces of at least 0.05 % of the surface (those segmentation scores)",
+    row(f"... or with that of its faces of at least {100 * scoring.MIN_FACE_FRACTION:g} % of the surface "
+        "(those segmentation scores)",
         lambda x: f"{x['visible_types_equal']}/{x['meshes']}")
     row("... with its face count", lambda x: f"{x['faces_equal']}/{x['meshes']}")
     row("volume error, median over solids", lambda x: _pct(x["volume_error_median"]))

@@ -1295,10 +1295,9 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   auto identify_all = [&](const std::vector<PatchPoints>& points, const std::vector<char>& which,
                           const ProgressSpan& span) {
     layer.features.resize(points.size());
-    const std::vector<int> order = largest_first(points, which);
     on_two_threads(
-        order, [&](int p) { layer.features[p] = identify_points(points[p], curvature[p]); },
-        [&](size_t k) { span.step(static_cast<double>(k) / order.size()); });
+        largest_first(points, which), [&](int p) { layer.features[p] = identify_points(points[p], curvature[p]); },
+        span);
   };
   std::vector<PatchPoints> points = patch_points(mesh, layer.labels, num_patches);
   identify_all(points, std::vector<char>(num_patches, 1), progress.sub(0.01, 0.06));
@@ -1319,15 +1318,14 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   auto refit_changed = [&](const std::vector<char>& changed, const ProgressSpan& span) {
     std::vector<char> which = changed;
     for (size_t p = 0; p < which.size(); ++p) which[p] &= layer.features[p].type != SurfaceType::Freeform;
-    const std::vector<int> order = largest_first(points, which);
     on_two_threads(
-        order,
+        largest_first(points, which),
         [&](int p) {
           Feature& f = layer.features[p];
           const SurfaceFit fit = fit_surface(f.type, points[p], options.fit, &f.surface);
           if (fit.valid) f.set_fit(fit);
         },
-        [&](size_t k) { span.step(static_cast<double>(k) / order.size()); });
+        span);
   };
   // Rounds stop early when nothing moves: each round takes its share of the span.
   auto reassign = [&](const ProgressSpan& span) {
@@ -1606,7 +1604,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
             f.set_fit(fit);
             f.vertices = static_cast<int>(now[p].points.rows());
           },
-          [](size_t) {});
+          ProgressSpan());
       count_faces(area, layer.labels, layer.features);
     }
     // A surface that the stages between merging and here left in two pieces (a sculpted cylinder

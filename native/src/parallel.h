@@ -25,13 +25,13 @@ void on_two_threads(const Half& half) {
   second.get();
 }
 
-// Runs work(i) for each i of `items`, dealing them out in turn: put the largest first. `step(k)`
-// (k of the items done) runs on the calling thread; it reports progress and may throw to cancel.
-template <class Work, class Step>
-void on_two_threads(const std::vector<int>& items, const Work& work, const Step& step) {
+// Runs work(i) for each i of `items`, dealing them out in turn: put the largest first. Before each of
+// its items the calling thread reports the share done into `progress` (which may throw to cancel).
+template <class Work>
+void on_two_threads(const std::vector<int>& items, const Work& work, const ProgressSpan& progress) {
   on_two_threads([&](size_t first) {
     for (size_t k = first; k < items.size(); k += 2) {
-      if (first == 0) step(k);
+      if (first == 0) progress.step(static_cast<double>(k) / items.size());
       work(items[k]);
     }
   });

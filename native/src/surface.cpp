@@ -72,17 +72,20 @@ struct Distances {
     const double radial = off_axis(x, y, z, h) - radius;
     return std::sqrt(radial * radial + h * h) - minor;
   }
-  // The distance across a cone's generators; `along` < 0 behind the apex, where the apex is closest.
+  // The distance across a cone's generators, and `along` them from the apex.
   double cone_across(double x, double y, double z, double& along) const {
     const double h = height(x, y, z);
     const double d = off_axis(x, y, z, h);
     along = d * sin_angle + h * cos_angle;
     return d * cos_angle - h * sin_angle;
   }
+  // Behind the apex (or nowhere along, NaN) the apex itself is closest.
+  static bool behind_apex(double along) { return !(along >= 0.0); }
+  static double to_apex(double x, double y, double z, double across) { return std::copysign(length(x, y, z), across); }
   double cone(double x, double y, double z) const {
     double along;
     const double across = cone_across(x, y, z, along);
-    return along >= 0.0 ? across : std::copysign(length(x, y, z), across);
+    return behind_apex(along) ? to_apex(x, y, z, across) : across;
   }
 
   double ax, ay, az, radius, minor, cos_angle, sin_angle;
@@ -132,8 +135,8 @@ void signed_distances(const Surface& s, const Eigen::Vector3d* p, size_t n, doub
       double along[kChunk];
       in_chunks(s.point, p, n, out, [&](const Chunk& c, size_t m, double* o) {
         for (size_t i = 0; i < m; ++i) o[i] = d.cone_across(c.x[i], c.y[i], c.z[i], along[i]);
-        for (size_t i = 0; i < m; ++i)
-          if (along[i] < 0.0) o[i] = std::copysign(Distances::length(c.x[i], c.y[i], c.z[i]), o[i]);
+        for (size_t i = 0; i < m; ++i)  // (apart: the square root only where needed)
+          if (Distances::behind_apex(along[i])) o[i] = Distances::to_apex(c.x[i], c.y[i], c.z[i], o[i]);
       });
       return;
     }
