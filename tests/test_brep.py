@@ -383,6 +383,26 @@ def test_cad_mesh_of_the_benchmarks_largest_part_gives_its_solid():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_cad_mesh_of_a_bolt_gives_its_chamfers_exactly():
+    """The benchmark's CAD tessellation of as_bolt-colored-faces: its 45° chamfer is a cone band one
+    facet row wide, whose interior vertices lie on one circle (its half-angle was fitted 0.1° off),
+    and the six corners of its hexagon head are pieces of one 60° cone whose edges the STEP file
+    gives to 1.5e-4, so that each piece's fit tilts by up to 0.2° and puts its apex beyond the
+    coaxial tolerance. The band is fitted to all its vertices, and the corners are coaxial where
+    they lie. The solid has the part's faces and its volume within 0.05 % (0.1 % before)."""
+    m = shapes.benchmark_mesh("as_bolt-colored-faces.stp", "cad")
+    truth = shapes.benchmark_truth("as_bolt-colored-faces.stp")
+    layer = idealize.idealize(Mesh(m.V, m.F))
+    solid = idealize.make_solid(layer)
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == truth["surface_types"]
+    assert abs(solid.volume / truth["volume"] - 1) < 5e-4
+    chamfer = max((f for f in layer.features if f["type"] == "cone"), key=lambda f: f["area"])
+    assert abs(np.degrees(chamfer["params"]["half_angle"]) - 45) < 1e-3
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_shell_of_a_part_that_does_not_close_keeps_only_sound_tolerances():
     """The benchmark's sculpted as_ANC101 does not close. On one edge OpenCASCADE's curve-on-surface
     check returned a distance of 3.5 m for a pcurve on this 0.5 m part, which became the tolerance

@@ -1561,6 +1561,24 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   compact_features(layer.labels, layer.features);
   count_faces(area, layer.labels, layer.features);
 
+  // On an exact tessellation the rim vertices lie on the surface as well: the surfaces are fitted
+  // once more to every vertex, where that fits them better. (The interior vertices alone leave a
+  // narrow band undetermined: those of a chamfer cone one facet row wide lie on one circle, which
+  // a cone of any half-angle passes through.)
+  if (exact_mesh) {
+    const std::vector<PatchPoints> whole = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), -1);
+    std::vector<char> which(layer.features.size(), 0);
+    for (size_t p = 0; p < which.size(); ++p) which[p] = layer.features[p].type != SurfaceType::Freeform;
+    on_two_threads(
+        largest_first(whole, which),
+        [&](int p) {
+          Feature& f = layer.features[p];
+          const SurfaceFit fit = fit_surface(f.type, whole[p], options.fit, &f.surface);
+          if (fit.valid && fit.rms < fit_of(f.surface, whole[p]).rms) f.set_fit(fit);
+        },
+        ProgressSpan());
+  }
+
   // On a noisy mesh, features whose own points cannot fix an axis take a related feature's.
   if (!exact_mesh) {
     SharedAxisOptions shared;
@@ -1692,7 +1710,14 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     IdealizationOptions ideal;
     ideal.angle_tolerance_degrees = options.angle_tolerance_degrees;
     ideal.distance_tolerance = layer.distance_tolerance;
+    ideal.exact = exact_mesh;
     const std::vector<Feature> fitted = layer.features;
+    // On an exact tessellation, profiles are fitted again about the ideal axes (to every vertex, as
+    // above). On a noisy mesh the fitted profiles stay (measured on the benchmark: refitted about
+    // the ideal axes, the scans' median radius error grew from 0.38 % to 0.53 %).
+    const std::vector<PatchPoints> whole =
+        exact_mesh ? patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), -1) : std::vector<PatchPoints>();
+    if (exact_mesh) ideal.points = &whole;
     if (idealize_features(layer.features, layer.relations, ideal) > 0) {
       // An ideal surface must still describe its patch: where it fits clearly worse than the fitted
       // one (a direction that only looked ideal, radii that only looked equal), the fit stays.

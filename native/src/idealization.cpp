@@ -127,17 +127,21 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       for (int m : group) features[m].surface.axis = aligned(d, features[m].surface.axis);
     }
   Frame frame;
-  if (options.snap_to_frame && part_frame(features, unsnapped, std::sin(angle), frame)) {
+  if (options.snap_to_frame && part_frame(options.exact ? before : features, unsnapped, std::sin(angle), frame)) {
     const std::vector<Eigen::Vector3d> ideals = ideal_directions(frame);
     for (Feature& f : features)
       if (analytic(f) && f.surface.has_direction() && !unsnapped[f.id])
         f.surface.axis = snapped(f.surface.axis, ideals, cos_tolerance);
   }
 
-  for (const FeatureRelation& r : relations) {
-    const std::vector<int>& group = r.features;
+  auto group_area = [&](const std::vector<int>& group) {
     double area = 0.0;
     for (int m : group) area += features[m].area;
+    return area;
+  };
+  for (const FeatureRelation& r : relations) {
+    const std::vector<int>& group = r.features;
+    const double area = group_area(group);
     if (!(area > 0.0)) continue;
     if (r.kind == "coplanar") {  // 2. one offset along the shared normal
       const Eigen::Vector3d n = features[largest(group, features)].surface.axis;
@@ -160,7 +164,28 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
         s.axis = aligned(a, s.axis);
         s.point = across + s.point.dot(a) * a;
       }
-    } else if (r.kind == "equal_radius") {  // 4. one radius: the area-weighted median, blind to a poor fit
+    }
+  }
+
+  // 4. Profiles: a cylinder or cone whose axis moved is fitted again about its ideal axis (the
+  // radius of a cylinder, apex and half-angle of a cone), where that fits its points.
+  if (options.points)
+    for (Feature& f : features) {
+      const Surface& was = before[f.id].surface;
+      if ((f.type != SurfaceType::Cylinder && f.type != SurfaceType::Cone) ||
+          (f.surface.axis == was.axis && f.surface.point == was.point) ||
+          static_cast<size_t>(f.id) >= options.points->size())
+        continue;
+      const FitData& data = (*options.points)[f.id];
+      const SurfaceFit profile = fit_about_axis(f.type, data, f.surface.point, f.surface.axis);
+      if (profile.valid && profile.surface.axis.dot(f.surface.axis) > 0.0) f.surface = profile.surface;
+    }
+
+  for (const FeatureRelation& r : relations) {
+    const std::vector<int>& group = r.features;
+    const double area = group_area(group);
+    if (!(area > 0.0)) continue;
+    if (r.kind == "equal_radius") {  // 5. one radius: the area-weighted median, blind to a poor fit
       std::vector<std::pair<double, double>> radii;
       for (int m : group) radii.emplace_back(tube_radius(features[m]), features[m].area);
       std::sort(radii.begin(), radii.end());
@@ -171,14 +196,14 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
           break;
         }
       for (int m : group) tube_radius(features[m]) = radius;
-    } else if (r.kind == "concentric") {  // 5. one centre
+    } else if (r.kind == "concentric") {  // 6. one centre
       Eigen::Vector3d centre = Eigen::Vector3d::Zero();
       for (int m : group) centre += features[m].area * features[m].surface.point / area;
       for (int m : group) features[m].surface.point = centre;
     }
   }
 
-  // 6. Tangency (thesis 4.3): a cylinder tangent to planes parallel to its axis keeps its radius
+  // 7. Tangency (thesis 4.3): a cylinder tangent to planes parallel to its axis keeps its radius
   // (possibly just made equal to others) and moves its axis so that it touches them: one plane
   // fixes the axis's distance from it, two fix the axis.
   for (Feature& cylinder : features) {
@@ -212,7 +237,7 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
     }
   }
 
-  // 7. A sphere tangent to cylinders (the ball in the corner where fillets meet, thesis 4.3 case 2)
+  // 8. A sphere tangent to cylinders (the ball in the corner where fillets meet, thesis 4.3 case 2)
   // is completely defined by them: its centre is the point nearest to their axes (on the axis for
   // one), its radius theirs.
   for (Feature& sphere : features) {
@@ -241,7 +266,7 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
     sphere.surface.radius = radius;
   }
 
-  // 8. A torus tangent to a plane across its axis and to a coaxial cylinder (the fillet at the foot
+  // 9. A torus tangent to a plane across its axis and to a coaxial cylinder (the fillet at the foot
   // of a boss or the rim of a bore) keeps its tube radius and touches both: its centre lies the tube
   // radius from the plane, its circle the tube radius from the cylinder.
   for (Feature& torus : features) {
