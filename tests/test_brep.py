@@ -403,6 +403,27 @@ def test_cad_mesh_of_a_bolt_gives_its_chamfers_exactly():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_cad_mesh_of_a_swept_spline_face_gives_its_bspline_face():
+    """The benchmark's CAD tessellation of as_ANC101 has a face swept from a spline profile that
+    bulges between two planes it is tangent to, 23 facet strips wide. Each few strips fit a cylinder
+    (or a plane) as exactly as the export allows, and the face came out as seven cylinders of radii
+    6.4 to 15.8 about parallel axes and three planes, each on too few rulings to tell. They are one
+    freeform face now, whose swept B-spline closes the solid: the part's faces, surfaces and volume."""
+    m = shapes.benchmark_mesh("as_ANC101.stp", "cad")
+    truth = shapes.benchmark_truth("as_ANC101.stp")
+    layer = idealize.idealize(Mesh(m.V, m.F))
+    solid = idealize.make_solid(layer)
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == truth["surface_types"]
+    assert solid.faces == truth["faces"]
+    assert abs(solid.volume / truth["volume"] - 1) < 5e-4
+    [freeform] = [f for f in layer.features if f["type"] == "freeform"]
+    assert np.bincount(m.gt[np.asarray(layer.labels) == freeform["id"]]).argmax() == next(
+        i for i, t in enumerate(m.face_types) if t == "SurfaceOfExtrusion")
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_shell_of_a_part_that_does_not_close_keeps_only_sound_tolerances():
     """The benchmark's sculpted as_ANC101 does not close. On one edge OpenCASCADE's curve-on-surface
     check returned a distance of 3.5 m for a pcurve on this 0.5 m part, which became the tolerance

@@ -733,6 +733,28 @@ def test_bspline_fit_reaches_the_noise():
     assert fit["poles"].shape[0] < exact["poles"].shape[0]
 
 
+def test_bspline_fits_an_extruded_profile_that_folds():
+    """A C-shaped profile (its tangent turns by 200°) swept 10 mm along z folds over every plane:
+    its surface is the profile's B-spline curve swept along z, which passes through the points and
+    is straight along z (the sweep's rows of poles are copies of each other moved along it)."""
+    t = np.linspace(-1.75, 1.75, 60)
+    profile = np.column_stack([(8 + 2 * np.sin(2 * t)) * np.cos(t), (8 + 2 * np.sin(2 * t)) * np.sin(t)])
+    tangent = np.gradient(profile, axis=0)
+    normal = np.column_stack([tangent[:, 1], -tangent[:, 0]]) / np.linalg.norm(tangent, axis=1)[:, None]
+    rows = np.linspace(0, 10, 6)
+    points = np.vstack([np.column_stack([profile, np.full(len(t), z)]) for z in rows]) + [3, 4, 5]
+    normals = np.vstack([np.column_stack([normal, np.zeros(len(t))])] * len(rows))
+    order = np.random.default_rng(1).permutation(len(points))  # no order to rely on
+    fit = native.fit_bspline_surface(points[order], normals[order], np.ones(len(points)))
+    assert fit["valid"] and fit["extrusion"], fit["problem"]
+    assert fit["max_error"] < 1e-3 * 20
+    assert abs(abs(fit["v_direction"][2]) - 1) < 1e-9
+    poles = fit["poles"]
+    steps = np.diff(poles, axis=1)
+    assert np.allclose(steps, steps[:1, :1], atol=1e-9)  # every row the same move along the sweep
+    assert np.allclose(np.cross(steps.reshape(-1, 3), [0, 0, 1]), 0, atol=1e-9)
+
+
 def test_bspline_fit_refuses_what_is_no_height_field():
     """Points all round a tube fold over any plane: no surface, and the reason."""
     t = np.linspace(0, 2 * np.pi, 400, endpoint=False)

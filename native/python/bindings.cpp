@@ -461,12 +461,15 @@ PYBIND11_MODULE(_native, m) {
         d["v_direction"] = fit.v_direction;
         d["rms"] = fit.rms;
         d["max_error"] = fit.max_error;
+        d["extrusion"] = fit.extrusion;
         return d;
       },
       py::arg("points"), py::arg("normals"), py::arg("weights"),
       "Fit a bicubic B-spline height field over the points' mean plane (a freeform patch's surface): "
       "poles (#u x #v x 3), distinct uniform knots (clamped), the plane (S(u, v) lies over origin + u "
-      "u_direction + v v_direction), RMS and largest distance along the plane's normal.");
+      "u_direction + v v_direction), RMS and largest distance along the plane's normal. A patch that "
+      "folds over the plane but whose normals all lie across one direction gets its profile swept "
+      "along v_direction instead (extrusion: true; u is the profile's parameter).");
 
   m.def(
       "vertex_curvature",

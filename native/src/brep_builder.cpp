@@ -529,15 +529,30 @@ Handle(Geom_BSplineSurface) occt_bspline(const BSplineSurfaceFit& fit) {
 }
 
 // A freeform feature's fitted surface, and its tangent plane nearest a point: Gauss–Newton for the
-// foot point from the point's place over the mean plane (the surface is a height field over it).
+// foot point from the point's place over the mean plane (the surface is a height field over it), or
+// for an extruded profile from the nearest of a row of samples along the profile.
 struct FreeformSurface {
   Handle(Geom_BSplineSurface) surface;
   Vec3 origin, u_direction, v_direction;
+  bool extrusion = false;
 
   Surface tangent_plane(const Vec3& p) const {
     double u = (p - origin).dot(u_direction), v = (p - origin).dot(v_direction);
     double u0, u1, v0, v1;
     surface->Bounds(u0, u1, v0, v1);
+    if (extrusion) {
+      constexpr int kSamples = 256;
+      double nearest = std::numeric_limits<double>::infinity();
+      const double along = std::clamp(v, v0, v1);
+      for (int i = 0; i <= kSamples; ++i) {
+        const double t = u0 + (u1 - u0) * i / kSamples;
+        const double distance = to_vec(surface->Value(t, along)).squaredNorm() - 2.0 * to_vec(surface->Value(t, along)).dot(p);
+        if (distance < nearest) {
+          nearest = distance;
+          u = t;
+        }
+      }
+    }
     gp_Pnt at;
     gp_Vec du, dv;
     for (int iteration = 0; iteration < 6; ++iteration) {
@@ -806,7 +821,7 @@ void BrepBuilder::fit_freeform_surfaces(const TriangleMesh& mesh, const std::vec
       continue;
     }
     try {
-      freeform_[feature] = {occt_bspline(fit), fit.origin, fit.u_direction, fit.v_direction};
+      freeform_[feature] = {occt_bspline(fit), fit.origin, fit.u_direction, fit.v_direction, fit.extrusion};
     } catch (const Standard_Failure& failure) {
       result.problems.push_back({feature, occt_message(failure, "the B-spline surface could not be made")});
     }
@@ -1472,8 +1487,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     if (s.type != SurfaceType::Freeform) {
       region_sense_[r] += occt_sense * surface_normal(s, centre).dot(area_normal);
     } else if (const auto spline = freeform_.find(topo_.region_feature[r]); spline != freeform_.end()) {
-      // The height field's normal is that of its mean plane, up to its slope.
-      region_sense_[r] += spline->second.u_direction.cross(spline->second.v_direction).dot(area_normal);
+      region_sense_[r] += spline->second.tangent_plane(centre).axis.dot(area_normal);
     }
   }
   region_surfaces_.resize(regions);

@@ -11,6 +11,13 @@
 // Of the grids with enough points per span (spans doubled from one), the coarsest that fits about
 // as well as the best: on an exact tessellation the finest the points' density allows, on a scan the
 // one whose residual reaches the noise.
+//
+// A patch that folds over every plane but whose normals all lie across one direction (an extruded
+// profile whose tangent turns by more than a right angle) is taken as a profile curve swept along
+// that direction: the points across it ordered by a chain of nearest neighbours, a cubic B-spline
+// curve fitted to them over chord lengths with parameter correction (J. Hoschek, "Intrinsic
+// parametrization for approximation", CAGD 5(1), 1988), and its poles repeated at the Greville
+// abscissae along the direction, where the surface is exactly linear.
 #pragma once
 
 #include "mesh.h"
@@ -36,6 +43,12 @@ struct BSplineFitOptions {
   // Normals further than this angle (radians) from the mean plane's normal fold the height field:
   // such a patch (a tube, a wrapped sheet) gets no surface.
   double max_tilt = 80.0 * 3.14159265358979323846 / 180.0;
+  // A patch that folds but whose normals all lie within this angle (radians) of a plane is an
+  // extruded profile (a sketched spline pulled straight), fitted as that profile swept along the
+  // plane's normal. On an exact tessellation its normals lie across the direction to rounding; a
+  // scan's noise tilts them by more.
+  double max_extrusion_tilt = 0.5 * 3.14159265358979323846 / 180.0;
+  int max_profile_points = 2000;  // the profile is ordered and fitted on an even subsample of more
 };
 
 struct BSplineSurfaceFit {
@@ -50,11 +63,16 @@ struct BSplineSurfaceFit {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero(), u_direction = Eigen::Vector3d::UnitX(),
                   v_direction = Eigen::Vector3d::UnitY();
   double rms = 0.0, max_error = 0.0;  // distances of the points along the plane's normal
+  // Or the surface is a profile swept along v_direction (S(u, v) = C(u) + v·v_direction): u is the
+  // profile curve's parameter, not a coordinate over a plane; rms and max_error are distances from
+  // the profile across v_direction.
+  bool extrusion = false;
 };
 
 // Fits the surface to `points` (#P x 3) with `weights` (#P, non-negative, e.g. vertex areas);
-// `normals` (#N x 3, unit, any count: e.g. face normals) only check that the patch is a height
-// field over its mean plane. Invalid, with a problem, when it is not, or for fewer than 16 points.
+// `normals` (#N x 3, unit, any count: e.g. face normals) check that the patch is a height field
+// over its mean plane, or else an extruded profile. Invalid, with a problem, when it is neither, or
+// for fewer than 16 points.
 BSplineSurfaceFit fit_bspline_surface(const MatrixX3d& points, const Eigen::VectorXd& weights,
                                       const MatrixX3d& normals, const BSplineFitOptions& options = {});
 

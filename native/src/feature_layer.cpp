@@ -1,4 +1,5 @@
 #include "feature_layer.h"
+#include "bspline_fitting.h"
 #include "relaxation.h"
 
 #include "edge_fillets.h"
@@ -1182,6 +1183,115 @@ bool join_freeform_features(const TriangleMesh& mesh, const MeshTopology& topolo
   return any;
 }
 
+// On an exact tessellation, a freeform face swept from a profile (a sketched spline pulled
+// straight) falls apart into the surfaces that each fit a few of its facet strips exactly: cylinders
+// of different radii about parallel axes, tangent to each other, and planes of one strip between
+// them. Three or more such pieces, each too small for its fit to tell its surface from a spline's
+// (a cylinder of fewer than kInteriorPoints vertices on fewer rulings than a circle's parameters
+// and three, as identification asks of an exact fit, or on more but off it by more than the
+// coordinates' rounding `floor`; a plane of fewer than kInteriorPoints vertices), meeting without a crease,
+// through all of whose vertices one B-spline surface passes within the distance tolerance, are that
+// face: they join as one freeform feature. (Not within the exact distance: a least-squares spline
+// over a few dozen profile points leaves a few times that.) Returns whether any joined.
+bool join_sampled_extrusions(const TriangleMesh& mesh, const MeshTopology& topology, double tolerance,
+                             double exact_distance, double floor, double angle_tolerance, std::vector<int>& labels,
+                             std::vector<Feature>& features) {
+  const std::vector<PatchPoints> points = patch_points(mesh, labels, static_cast<int>(features.size()), -1);
+  // The rulings of a cylinder: its vertices across the axis, those within the exact distance as one.
+  const auto rulings = [&](int p) {
+    const Surface& c = features[p].surface;
+    std::vector<Eigen::Vector3d> distinct;
+    for (Eigen::Index i = 0; i < points[p].points.rows(); ++i) {
+      const Eigen::Vector3d v = points[p].points.row(i).transpose() - c.point;
+      const Eigen::Vector3d across = v - v.dot(c.axis) * c.axis;
+      if (std::none_of(distinct.begin(), distinct.end(), [&](const Eigen::Vector3d& q) { return (q - across).norm() <= exact_distance; }))
+        distinct.push_back(across);
+    }
+    return static_cast<int>(distinct.size());
+  };
+  std::vector<char> small(features.size(), 0);
+  for (size_t p = 0; p < features.size(); ++p) {
+    const Feature& f = features[p];
+    if (f.type == SurfaceType::Plane) small[p] = f.vertices < kInteriorPoints;
+    else if (f.type == SurfaceType::Cylinder && points[p].points.rows() < kInteriorPoints)
+      small[p] = f.rms > 2.0 * floor || rulings(static_cast<int>(p)) < 3 + 3;
+  }
+  const std::map<std::pair<int, int>, double> turns = boundary_turns(mesh, topology, labels);
+  std::vector<int> parent(features.size());
+  const std::function<int(int)> root = [&](int p) { return parent[p] == p ? p : parent[p] = root(parent[p]); };
+  // The small pieces that meet without a crease, in groups.
+  const auto grouped = [&] {
+    std::iota(parent.begin(), parent.end(), 0);
+    for (const auto& [pair, turn] : turns)
+      if (small[pair.first] && small[pair.second] && turn <= kLargestFacetTurn) parent[root(pair.first)] = root(pair.second);
+    std::map<int, std::vector<int>> groups;
+    for (size_t p = 0; p < features.size(); ++p)
+      if (small[p]) groups[root(static_cast<int>(p))].push_back(static_cast<int>(p));
+    return groups;
+  };
+  // One direction: the axis of the group's widest cylinder (-1: none).
+  const auto widest_cylinder = [&](const std::vector<int>& members) {
+    int widest = -1;
+    for (int m : members)
+      if (features[m].type == SurfaceType::Cylinder && (widest < 0 || features[m].area > features[widest].area)) widest = m;
+    return widest;
+  };
+  // How far a piece reaches across the direction: the diameter of its vertices seen along it.
+  const auto reach_across = [&](int p, const Eigen::Vector3d& direction) {
+    double widest = 0.0;
+    const MatrixX3d& v = points[p].points;
+    for (Eigen::Index i = 0; i < v.rows(); ++i)
+      for (Eigen::Index j = i + 1; j < v.rows(); ++j) {
+        const Eigen::Vector3d d = (v.row(i) - v.row(j)).transpose();
+        widest = std::max(widest, (d - d.dot(direction) * direction).norm());
+      }
+    return widest;
+  };
+  // A plane of the profile is a chord of it, no wider across the direction than its cylinders'
+  // pieces; a plane tangent to the profile's end (as small a piece where the export gives it two
+  // facets) reaches far beyond.
+  for (const auto& [group_root, members] : grouped()) {
+    const int widest = widest_cylinder(members);
+    if (widest < 0) continue;
+    const Eigen::Vector3d direction = features[widest].surface.axis;
+    double reach = 0.0;
+    for (int m : members)
+      if (features[m].type == SurfaceType::Cylinder) reach = std::max(reach, reach_across(m, direction));
+    for (int m : members)
+      if (features[m].type == SurfaceType::Plane && reach_across(m, direction) > reach) small[m] = 0;
+  }
+  std::vector<int> faces;
+  std::vector<int> slot(mesh.num_vertices(), -1);
+  bool any = false;
+  for (const auto& [group_root, members] : grouped()) {
+    const int widest = widest_cylinder(members);
+    const auto cylinders = std::count_if(members.begin(), members.end(),
+                                         [&](int m) { return features[m].type == SurfaceType::Cylinder; });
+    if (members.size() < 3 || cylinders < 2) continue;
+    // The axis of every cylinder along the direction, every plane's normal across it.
+    const Eigen::Vector3d direction = features[widest].surface.axis;
+    const bool swept = std::all_of(members.begin(), members.end(), [&](int m) {
+      const double along = std::abs(features[m].surface.axis.dot(direction));
+      return features[m].type == SurfaceType::Cylinder ? along >= std::cos(angle_tolerance) : along <= std::sin(angle_tolerance);
+    });
+    if (!swept) continue;
+    faces.clear();
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      if (labels[f] >= 0 && small[labels[f]] && root(labels[f]) == group_root) faces.push_back(f);
+    const PatchPoints union_points = face_points(mesh, faces.data(), static_cast<int>(faces.size()), slot, [](int) { return true; });
+    const BSplineSurfaceFit fit = fit_bspline_surface(union_points.points, union_points.weights, union_points.sample_normals);
+    if (!fit.valid || !(fit.max_error <= tolerance)) continue;
+    int largest = members.front();
+    for (int m : members)
+      if (features[m].area > features[largest].area) largest = m;
+    for (int f : faces) labels[f] = largest;
+    features[largest].type = SurfaceType::Freeform;
+    any = true;
+  }
+  if (any) compact_features(labels, features);
+  return any;
+}
+
 void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
                       const std::vector<Feature>& features, double tolerance, FeatureLayer& layer,
                       const ProgressSpan& progress) {
@@ -1674,6 +1784,11 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         (exact_mesh || f.spread > options.freeform_relative_size * std::sqrt(f.area)))
       f.type = SurfaceType::Freeform;
   if (join_freeform_features(mesh, topology, layer.labels, layer.features)) count_faces(area, layer.labels, layer.features);
+  // After the freeform features took their slivers: the planes tangent to a swept face's ends may be
+  // as small in the export.
+  if (exact_mesh && join_sampled_extrusions(mesh, topology, layer.distance_tolerance, exact_distance, floor,
+                                             options.angle_tolerance_degrees * M_PI / 180.0, layer.labels, layer.features))
+    count_faces(area, layer.labels, layer.features);
   stage("classify");
   progress.sub("relations", 0.98, 0.99).step(0.0);
 
