@@ -317,6 +317,20 @@ def solid_of_export(part):
     return idealize.make_solid(idealize.idealize(Mesh(V, F)))
 
 
+def benchmark_solid_of_its_part(name, variant):
+    """The benchmark's `variant` mesh of the STEP part `name`, its feature layer and solid, asserted
+    to be the part's: a valid solid with its faces, surfaces and volume (within 0.05 %)."""
+    m = shapes.benchmark_mesh(name, variant)
+    truth = shapes.benchmark_truth(name)
+    layer = idealize.idealize(Mesh(m.V, m.F))
+    solid = idealize.make_solid(layer)
+    assert solid.solid and solid.valid and solid.part_shape().isValid(), solid.problems
+    assert solid.surface_types == truth["surface_types"]
+    assert solid.faces == truth["faces"]
+    assert abs(solid.volume / truth["volume"] - 1) < 5e-4
+    return m, layer, solid
+
+
 @needs_freecad
 @shapes.needs_shared_data
 @pytest.mark.parametrize("name", ["as_bolt-colored-faces.stp", "as_isolated_blends_test_12.stp", "occt_mal_vis.step",
@@ -372,13 +386,7 @@ def test_cad_mesh_of_the_benchmarks_largest_part_gives_its_solid():
     crossing. Three long facets at the tangent borders of the r 22.225 cylinders were left as
     one-facet planes when the reassignment after merging took the rest of their pieces: they join
     the cylinder through their vertices. The solid has the part's faces, surfaces and volume."""
-    m = shapes.benchmark_mesh("nist_ftc_06_asme1_rd.stp", "cad")
-    truth = shapes.benchmark_truth("nist_ftc_06_asme1_rd.stp")
-    solid = idealize.make_solid(idealize.idealize(Mesh(m.V, m.F)))
-    assert solid.solid and solid.valid and solid.part_shape().isValid(), solid.problems
-    assert solid.surface_types == truth["surface_types"]
-    assert solid.faces == truth["faces"]
-    assert abs(solid.volume / truth["volume"] - 1) < 5e-4
+    benchmark_solid_of_its_part("nist_ftc_06_asme1_rd.stp", "cad")
 
 
 @needs_freecad
@@ -390,13 +398,7 @@ def test_cad_mesh_of_a_bolt_gives_its_chamfers_exactly():
     gives to 1.5e-4, so that each piece's fit tilts by up to 0.2° and puts its apex beyond the
     coaxial tolerance. The band is fitted to all its vertices, and the corners are coaxial where
     they lie. The solid has the part's faces and its volume within 0.05 % (0.1 % before)."""
-    m = shapes.benchmark_mesh("as_bolt-colored-faces.stp", "cad")
-    truth = shapes.benchmark_truth("as_bolt-colored-faces.stp")
-    layer = idealize.idealize(Mesh(m.V, m.F))
-    solid = idealize.make_solid(layer)
-    assert solid.solid and solid.valid, solid.problems
-    assert solid.surface_types == truth["surface_types"]
-    assert abs(solid.volume / truth["volume"] - 1) < 5e-4
+    _, layer, _ = benchmark_solid_of_its_part("as_bolt-colored-faces.stp", "cad")
     chamfer = max((f for f in layer.features if f["type"] == "cone"), key=lambda f: f["area"])
     assert abs(np.degrees(chamfer["params"]["half_angle"]) - 45) < 1e-3
 
@@ -409,14 +411,7 @@ def test_cad_mesh_of_a_swept_spline_face_gives_its_bspline_face():
     (or a plane) as exactly as the export allows, and the face came out as seven cylinders of radii
     6.4 to 15.8 about parallel axes and three planes, each on too few rulings to tell. They are one
     freeform face now, whose swept B-spline closes the solid: the part's faces, surfaces and volume."""
-    m = shapes.benchmark_mesh("as_ANC101.stp", "cad")
-    truth = shapes.benchmark_truth("as_ANC101.stp")
-    layer = idealize.idealize(Mesh(m.V, m.F))
-    solid = idealize.make_solid(layer)
-    assert solid.solid and solid.valid, solid.problems
-    assert solid.surface_types == truth["surface_types"]
-    assert solid.faces == truth["faces"]
-    assert abs(solid.volume / truth["volume"] - 1) < 5e-4
+    m, layer, _ = benchmark_solid_of_its_part("as_ANC101.stp", "cad")
     [freeform] = [f for f in layer.features if f["type"] == "freeform"]
     assert np.bincount(m.gt[np.asarray(layer.labels) == freeform["id"]]).argmax() == next(
         i for i, t in enumerate(m.face_types) if t == "SurfaceOfExtrusion")
@@ -449,13 +444,7 @@ def test_benchmarks_cad_mesh_keeps_slivers_and_narrow_bands(name):
     (its coordinates rounded to 2.5 µm) and has a cylinder one facet high between a plane and a
     fillet of r 0.72, whose first facets the planar split put with the cylinder's, and whose tori
     the B-rep then took for a scan's rounded edges. The solid has the part's surfaces."""
-    m = shapes.benchmark_mesh(name, "cad")
-    truth = shapes.benchmark_truth(name)
-    solid = idealize.make_solid(idealize.idealize(Mesh(m.V, m.F)))
-    assert solid.solid and solid.valid, solid.problems
-    assert solid.surface_types == truth["surface_types"]
-    assert solid.faces == truth["faces"]
-    assert abs(solid.volume / truth["volume"] - 1) < 5e-4
+    benchmark_solid_of_its_part(name, "cad")
 
 
 @needs_freecad

@@ -1186,13 +1186,13 @@ bool join_freeform_features(const TriangleMesh& mesh, const MeshTopology& topolo
 // On an exact tessellation, a freeform face swept from a profile (a sketched spline pulled
 // straight) falls apart into the surfaces that each fit a few of its facet strips exactly: cylinders
 // of different radii about parallel axes, tangent to each other, and planes of one strip between
-// them. Three or more such pieces, each too small for its fit to tell its surface from a spline's
-// (a cylinder of fewer than kInteriorPoints vertices on fewer rulings than a circle's parameters
-// and three, as identification asks of an exact fit, or on more but off it by more than the
-// coordinates' rounding `floor`; a plane of fewer than kInteriorPoints vertices), meeting without a crease,
-// through all of whose vertices one B-spline surface passes within the distance tolerance, are that
-// face: they join as one freeform feature. (Not within the exact distance: a least-squares spline
-// over a few dozen profile points leaves a few times that.) Returns whether any joined.
+// them. Three or more such pieces meeting without a crease, each of fewer than kInteriorPoints
+// vertices and too few to tell its surface from a spline's (a cylinder's on fewer rulings than a
+// circle's parameters and three, as identification asks of an exact fit, or off it by more than
+// the coordinates' rounding `floor`), through all of whose vertices one B-spline surface passes
+// within the distance `tolerance`, are that face: they join as one freeform feature. (Not within
+// the exact distance: a least-squares spline over a few dozen profile points leaves a few times
+// that.) Returns whether any joined.
 bool join_sampled_extrusions(const TriangleMesh& mesh, const MeshTopology& topology, double tolerance,
                              double exact_distance, double floor, double angle_tolerance, std::vector<int>& labels,
                              std::vector<Feature>& features) {
@@ -1204,17 +1204,17 @@ bool join_sampled_extrusions(const TriangleMesh& mesh, const MeshTopology& topol
     for (Eigen::Index i = 0; i < points[p].points.rows(); ++i) {
       const Eigen::Vector3d v = points[p].points.row(i).transpose() - c.point;
       const Eigen::Vector3d across = v - v.dot(c.axis) * c.axis;
-      if (std::none_of(distinct.begin(), distinct.end(), [&](const Eigen::Vector3d& q) { return (q - across).norm() <= exact_distance; }))
-        distinct.push_back(across);
+      const auto near = [&](const Eigen::Vector3d& q) { return (q - across).norm() <= exact_distance; };
+      if (std::none_of(distinct.begin(), distinct.end(), near)) distinct.push_back(across);
     }
     return static_cast<int>(distinct.size());
   };
   std::vector<char> small(features.size(), 0);
   for (size_t p = 0; p < features.size(); ++p) {
     const Feature& f = features[p];
-    if (f.type == SurfaceType::Plane) small[p] = f.vertices < kInteriorPoints;
-    else if (f.type == SurfaceType::Cylinder && points[p].points.rows() < kInteriorPoints)
-      small[p] = f.rms > 2.0 * floor || rulings(static_cast<int>(p)) < 3 + 3;
+    if (points[p].points.rows() >= kInteriorPoints) continue;
+    if (f.type == SurfaceType::Plane) small[p] = 1;
+    else if (f.type == SurfaceType::Cylinder) small[p] = f.rms > 2.0 * floor || rulings(static_cast<int>(p)) < 3 + 3;
   }
   const std::map<std::pair<int, int>, double> turns = boundary_turns(mesh, topology, labels);
   std::vector<int> parent(features.size());
