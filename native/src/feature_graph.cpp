@@ -157,13 +157,16 @@ void build_feature_graph(const TriangleMesh& mesh, const MeshTopology& topology,
     add_groups("coplanar", cluster(planes, features, [&](int x, int y) {
                  return std::abs((features[y].surface.point - features[x].surface.point).dot(features[x].surface.axis)) <= distance_tolerance;
                }), relations);
-    // Axes meet where the second feature lies: a cone's apex, far from its patch, moves with any
-    // tilt of its fit (a small chamfer cone of a hexagon's corner, tilted 0.2°, has its apex a
-    // tolerance and a half off the bolt's axis, while its axis passes the corner within a third).
+    // Axes meet where the second feature lies, within the distance by which moving its axis onto
+    // the first's moves its surface: a cone's apex, far from its patch, moves with any tilt of its
+    // fit (a small chamfer cone of a hexagon's corner, tilted 0.2°, has its apex a tolerance and a
+    // half off the bolt's axis, its axis passes the corner a tolerance off), and a shift across
+    // the axis moves a cone's surface by its cosine of the half-angle (the 60° corner cone's by half).
     add_groups("coaxial", cluster(axial, features, [&](int x, int y) {
                  const Surface &sx = features[x].surface, &sy = features[y].surface;
                  const Eigen::Vector3d at = sy.point + (centroid[y] - sy.point).dot(sy.axis) * sy.axis;
-                 return axial_coordinates(sx.point, sx.axis, at).distance <= distance_tolerance;
+                 const double moves = sy.type == SurfaceType::Cone ? std::cos(sy.half_angle) : 1.0;
+                 return moves * axial_coordinates(sx.point, sx.axis, at).distance <= distance_tolerance;
                }), relations);
   }
   // The spread added to the tolerances (equal_radii), measured on the benchmark: sculpt recall

@@ -1825,7 +1825,6 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     IdealizationOptions ideal;
     ideal.angle_tolerance_degrees = options.angle_tolerance_degrees;
     ideal.distance_tolerance = layer.distance_tolerance;
-    ideal.exact = exact_mesh;
     const std::vector<Feature> fitted = layer.features;
     // On an exact tessellation, profiles are fitted again about the ideal axes (to every vertex, as
     // above). On a noisy mesh the fitted profiles stay (measured on the benchmark: refitted about

@@ -127,7 +127,7 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       for (int m : group) features[m].surface.axis = aligned(d, features[m].surface.axis);
     }
   Frame frame;
-  if (options.snap_to_frame && part_frame(options.exact ? before : features, unsnapped, std::sin(angle), frame)) {
+  if (options.snap_to_frame && part_frame(features, unsnapped, std::sin(angle), frame)) {
     const std::vector<Eigen::Vector3d> ideals = ideal_directions(frame);
     for (Feature& f : features)
       if (analytic(f) && f.surface.has_direction() && !unsnapped[f.id])

@@ -24,11 +24,6 @@ struct IdealizationOptions {
   double distance_tolerance = 0.0;       // model units; must be set (the layer's tolerance)
   bool snap_to_frame = true;             // snap directions to the part's ideal directions
   std::vector<int> unsnapped;            // features (ids) whose directions stay as fitted
-  // The fits are exact (a CAD tessellation): the frame is the largest plane's fitted normal, which
-  // its parallel group's mean would tilt by the errors of smaller fits (a bolt's chamfer cones). On
-  // a noisy mesh the mean averages them out (measured on the benchmark: from the fitted normal, the
-  // sculpted parts' median axis error grew from 0.17° to 0.29°, the scans' fell from 0.04° to 0.02°).
-  bool exact = false;
   // The points of each feature (by id), or null: then a cylinder or cone whose axis the directions
   // and coaxial groups moved keeps its fitted profile; with them its profile is fitted again about
   // the ideal axis (the thesis's semi-defined features, 4.3: a narrow chamfer cone's fitted
