@@ -546,7 +546,7 @@ struct FreeformSurface {
       const double along = std::clamp(v, v0, v1);
       for (int i = 0; i <= kSamples; ++i) {
         const double t = u0 + (u1 - u0) * i / kSamples;
-        const double distance = to_vec(surface->Value(t, along)).squaredNorm() - 2.0 * to_vec(surface->Value(t, along)).dot(p);
+        const double distance = (to_vec(surface->Value(t, along)) - p).squaredNorm();
         if (distance < nearest) {
           nearest = distance;
           u = t;
