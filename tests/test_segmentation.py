@@ -41,6 +41,19 @@ def test_cad_tessellation_with_long_thin_triangles(tmp_path):
     assert len(seg.labels) == len(F)
     assert correct_faces(seg.labels, gt, shapes.triangle_areas(V, F)) >= 10  # of 11
 
+    # The refined pieces of each input triangle lie together, in the working mesh that later stages
+    # walk by neighbours, and cover it exactly; the input's vertices come first.
+    working = seg.working
+    origin = working["working_face_origin"]
+    assert len(origin) > 2 * len(F)
+    runs = 1 + np.count_nonzero(origin[1:] != origin[:-1])
+    assert runs == len(np.unique(origin)) == len(F)
+    WV, WF = working["working_vertices"], working["working_faces"]
+    np.testing.assert_array_equal(np.unique(WV[: len(V)], axis=0), np.unique(V, axis=0))
+    assert np.bincount(WF.ravel(), minlength=len(WV)).min() > 0
+    pieces = np.bincount(origin, weights=shapes.triangle_areas(WV, WF), minlength=len(F))
+    np.testing.assert_allclose(pieces, shapes.triangle_areas(V, F), rtol=1e-9, atol=0)
+
 
 def test_scan_like_mesh_finds_every_face(bracket_scan):
     """Chamfered edges from uniform re-tessellation: one patch per face, none leaking into another."""

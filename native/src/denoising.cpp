@@ -122,29 +122,40 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
   return normals;
 }
 
-// Moves each vertex so that its faces agree with the filtered normals (Zheng et al., eq. 7). Each
-// vertex gathers its faces' pulls in the order of the faces (as its list of faces holds them).
+// Moves each vertex so that its faces agree with the filtered normals (Zheng et al., eq. 7):
+//   v += 1/|F(v)| sum_f n_f n_f^T (c_f - v) = 1/|F(v)| (sum_f n_f (n_f . c_f) - M_v v),
+// where M_v = sum_f n_f n_f^T does not change between iterations: each pass then needs one number
+// per face. Coordinates are taken about the box centre, so that the two sums, which no longer
+// subtract positions before multiplying, lose nothing to an offset from the origin. Each vertex
+// gathers its faces in the order of its list of faces.
 MatrixX3d positions_fitting_normals(const TriangleMesh& mesh, const MeshTopology& topology,
                                     const MatrixX3d& normals, int iterations, const ProgressSpan& progress) {
-  MatrixX3d V = mesh.V, next(V.rows(), 3), centroid(mesh.num_faces(), 3);
-  const int nv = static_cast<int>(V.rows());
+  const int nv = mesh.num_vertices(), nf = mesh.num_faces();
+  const Eigen::RowVector3d centre = 0.5 * (mesh.V.colwise().minCoeff() + mesh.V.colwise().maxCoeff());
+  MatrixX3d V = mesh.V.rowwise() - centre, next(nv, 3);
+  std::vector<Eigen::Matrix3d> projection(nv, Eigen::Matrix3d::Zero());  // M_v
+  for_each_polled_on_two_threads(nv, progress.sub(0.0, 0.05), [&](int v) {
+    for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f)
+      projection[v].noalias() += normals.row(*f).transpose() * normals.row(*f);
+  });
+  Eigen::VectorXd offset(nf);  // n_f . c_f
   for (int it = 0; it < iterations; ++it) {
-    const ProgressSpan pass = progress.sub(static_cast<double>(it) / iterations, static_cast<double>(it + 1) / iterations);
-    for_each_polled_on_two_threads(mesh.num_faces(), pass.sub(0.0, 0.3), [&](int f) {
-      centroid.row(f) = (V.row(mesh.F(f, 0)) + V.row(mesh.F(f, 1)) + V.row(mesh.F(f, 2))) / 3.0;
+    const ProgressSpan pass = progress.sub(0.05 + 0.95 * it / iterations, 0.05 + 0.95 * (it + 1) / iterations);
+    for_each_polled_on_two_threads(nf, pass.sub(0.0, 0.3), [&](int f) {
+      offset[f] = normals.row(f).dot(V.row(mesh.F(f, 0)) + V.row(mesh.F(f, 1)) + V.row(mesh.F(f, 2))) / 3.0;
     });
     for_each_polled_on_two_threads(nv, pass.sub(0.3, 1.0), [&](int v) {
       const int count = topology.vertex_face_count(v);
       next.row(v) = V.row(v);
       if (count == 0 || topology.is_boundary_vertex(v)) return;
-      Eigen::RowVector3d delta = Eigen::RowVector3d::Zero();
+      Eigen::RowVector3d pull = Eigen::RowVector3d::Zero();
       for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f)
-        delta += normals.row(*f).dot(centroid.row(*f) - V.row(v)) * normals.row(*f);
-      next.row(v) += delta / count;
+        pull += offset[*f] * normals.row(*f);
+      next.row(v) += (pull - V.row(v) * projection[v]) / count;
     });
     V.swap(next);
   }
-  return V;
+  return V.rowwise() + centre;
 }
 
 }  // namespace

@@ -7,20 +7,12 @@
 #include <cstdio>
 #include <limits>
 #include <string>
-#include <unordered_map>
+#include <numeric>
+#include <tuple>
 
 namespace idealize {
 
 namespace {
-
-struct TripleHash {
-  size_t operator()(const std::array<int, 3>& t) const {
-    size_t h = static_cast<size_t>(t[0]) * 0x9E3779B97F4A7C15ull;
-    h ^= static_cast<size_t>(t[1]) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
-    h ^= static_cast<size_t>(t[2]) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
-    return h;
-  }
-};
 
 std::string number(double x) {
   char text[32];
@@ -114,10 +106,10 @@ PreparedMesh prepare_mesh(const TriangleMesh& input, const ProgressSpan& progres
   PreparedMesh out;
   // A triangle is degenerate when its area vanishes at the precision of the coordinates.
   const double zero_area = 1e-14 * diagonal * diagonal;
-  std::unordered_map<std::array<int, 3>, int, TripleHash> seen;  // sorted vertex triple -> first input face
-  seen.reserve(nf);
-  std::vector<int> kept;
-  kept.reserve(nf);
+  // Sorted vertex triples, bucketed by their smallest vertex: a face repeats the first face of its
+  // bucket with the same triple (linear apart from small per-bucket sorts, and in input order).
+  std::vector<std::array<int, 3>> triple(nf);
+  std::vector<int> bucket_offsets(nv + 1, 0);
   std::vector<int> first(nf, -1);  // input face -> the input face it repeats (itself if kept)
   for (int f = 0; f < nf; ++f) {
     progress.tick(f, nf);
@@ -127,15 +119,31 @@ PreparedMesh prepare_mesh(const TriangleMesh& input, const ProgressSpan& progres
       ++out.removed_degenerate;
       continue;
     }
-    std::array<int, 3> key{a, b, c};
-    std::sort(key.begin(), key.end());
-    const auto [it, inserted] = seen.emplace(key, f);
-    first[f] = it->second;
-    if (!inserted) {
-      ++out.removed_duplicate;
-      continue;
-    }
-    kept.push_back(f);
+    triple[f] = {a, b, c};
+    std::sort(triple[f].begin(), triple[f].end());
+    ++bucket_offsets[triple[f][0] + 1];
+    first[f] = f;
+  }
+  std::partial_sum(bucket_offsets.begin(), bucket_offsets.end(), bucket_offsets.begin());
+  std::vector<int> bucketed(bucket_offsets.back());
+  {
+    std::vector<int> cursor(bucket_offsets.begin(), bucket_offsets.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      if (first[f] >= 0) bucketed[cursor[triple[f][0]]++] = f;
+  }
+  for (int v = 0; v < nv; ++v) {
+    progress.poll(v);
+    const auto begin = bucketed.begin() + bucket_offsets[v], end = bucketed.begin() + bucket_offsets[v + 1];
+    if (end - begin < 2) continue;
+    std::sort(begin, end, [&](int f, int g) { return std::tie(triple[f], f) < std::tie(triple[g], g); });
+    for (auto it = begin + 1; it != end; ++it)
+      if (triple[*it] == triple[*(it - 1)]) first[*it] = first[*(it - 1)];
+  }
+  std::vector<int> kept;
+  kept.reserve(nf);
+  for (int f = 0; f < nf; ++f) {
+    if (first[f] == f) kept.push_back(f);
+    else if (first[f] >= 0) ++out.removed_duplicate;
   }
   if (kept.empty()) throw MeshError("every triangle of the mesh is degenerate (zero area)");
   in_spatial_order(input, kept);
