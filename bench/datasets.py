@@ -83,6 +83,7 @@ class LabelledMesh:
     face_types: List[str]          # surface class name of every B-rep face ("Plane", "Cylinder", ...)
     diag: float                    # bounding-box diagonal of the part
     info: Dict = field(default_factory=dict)
+    unperturbed: Optional[np.ndarray] = None  # scan, sculpt: the positions before noise or undulation
 
     @property
     def num_triangles(self) -> int:
@@ -392,18 +393,20 @@ def make_variant(part: _Part, variant: str) -> LabelledMesh:
     diag = meta["diag"]
     if variant == "cad":
         V, F, gt, info = part.tessellation(CAD_LINEAR_DEFLECTION, CAD_ANGULAR_DEFLECTION)
+        unperturbed = None
     elif variant in ("scan", "sculpt"):
-        V, F, gt, info = part.remeshed(SCAN_TRIANGLES)
+        unperturbed, F, gt, info = part.remeshed(SCAN_TRIANGLES)
         info = dict(info)
         seed = stable_seed(part.path.name, variant)
-        V = _scan_noise(V, F, diag, seed) if variant == "scan" else _sculpt(V, F, diag, seed)
+        perturb = _scan_noise if variant == "scan" else _sculpt
+        V = perturb(unperturbed, F, diag, seed)
         info["seed"] = seed
     else:
         raise ValueError(f"unknown variant {variant!r}")
     return LabelledMesh(name=f"{part.stem}/{variant}", part=part.path.name, variant=variant,
                         V=np.ascontiguousarray(V, dtype=np.float64), F=np.ascontiguousarray(F, dtype=np.int32),
                         gt=np.ascontiguousarray(gt, dtype=np.int32), face_types=list(meta["face_types"]),
-                        diag=float(diag), info=info)
+                        diag=float(diag), info=info, unperturbed=unperturbed)
 
 
 def load_part(path: Path, variants: Sequence[str] = VARIANTS, log=print) -> List[LabelledMesh]:

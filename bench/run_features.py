@@ -102,6 +102,29 @@ def parameter_errors(gt_surface: Dict, feature: Dict) -> Dict:
     return out
 
 
+def sampled_radius(gt_surface: Dict, unperturbed: np.ndarray, normals: np.ndarray, displacement: np.ndarray,
+                   vertices: np.ndarray) -> float:
+    """The radius a face has on the perturbed mesh: the true radius (the minor one of a torus) moved
+    by the mean displacement of the face's vertices along their normals, outwards from its axis,
+    centre or tube circle. Undulations longer than the face move it as a whole: no method can see
+    any other radius on the mesh."""
+    g, kind = gt_surface["params"], gt_surface["type"]
+    p = unperturbed[vertices]
+    if kind == "sphere":
+        radial, radius = p - np.asarray(g["center"]), g["radius"]
+    else:
+        axis = np.asarray(g["axis"], float) / np.linalg.norm(g["axis"])
+        offset = p - np.asarray(g["center" if kind == "torus" else "point"])
+        across = offset - np.outer(offset @ axis, axis)
+        if kind == "torus":
+            tube = across / np.linalg.norm(across, axis=1)[:, None] * g["major"]
+            radial, radius = offset - tube, g["minor"]
+        else:
+            radial, radius = across, g["radius"]
+    outwards = np.sign(np.einsum("ij,ij->i", radial, normals[vertices]).mean())
+    return radius + outwards * float(displacement[vertices].mean())
+
+
 def relation_counts(layer, gt_info: Dict, correct: Dict[int, int], diag: float) -> Dict:
     """True/false positives and misses per relation kind, among correctly segmented faces.
 
@@ -138,12 +161,22 @@ def bench_mesh(m, gt_info: Dict) -> Dict:
     surface_gt = ground_truth.surface_of_face(gt_info)[m.gt]
     surface_score = scoring.score(layer.labels, surface_gt, areas)
     correct = {e["best_patch"]: e["face"] for e in layer_score["per_face"] if e["status"] == "correct"}
+    if m.unperturbed is not None:
+        normals = datasets.vertex_normals(m.unperturbed, m.F)
+        displacement = np.einsum("ij,ij->i", m.V - m.unperturbed, normals)
     types = []
     for feature_id, face in sorted(correct.items()):
         gt_surface, feature = gt_info["faces"][face], layer.features[feature_id]
         entry = {"face": face, "gt": gt_surface["type"], "found": feature["type"]}
         if feature["type"] == gt_surface["type"] and gt_surface["type"] != "freeform":
             entry.update(parameter_errors(gt_surface, feature))
+            if "radius" in entry and m.unperturbed is not None:
+                true = gt_surface["params"].get("minor", gt_surface["params"].get("radius"))
+                found = feature["params"].get("minor", feature["params"].get("radius"))
+                sampled = sampled_radius(gt_surface, m.unperturbed, normals, displacement,
+                                         np.unique(m.F[m.gt == face]))
+                entry["radius_shift"] = abs(sampled - true) / true
+                entry["radius_vs_sampled"] = abs(found - sampled) / true
         types.append(entry)
     return {
         "name": m.name, "part": m.part, "variant": m.variant, "ok": True, "triangles": m.num_triangles,
@@ -169,6 +202,8 @@ def summarize(rows: List[Dict]) -> Dict:
         rs = [r for r in rows if r["variant"] == variant and r.get("ok")]
         types = [t for r in rs for t in r["types"]]
         radius = [t["radius"] for t in types if "radius" in t]
+        shift = [t["radius_shift"] for t in types if "radius_shift" in t]
+        vs_sampled = [t["radius_vs_sampled"] for t in types if "radius_vs_sampled" in t]
         axis = [t["axis_degrees"] for t in types if "axis_degrees" in t]
         cone = [t["half_angle_degrees"] for t in types if "half_angle_degrees" in t]
         rel = {k: {c: sum(r["relations"][k][c] for r in rs) for c in ("tp", "fp", "fn")} for k in RELATION_KINDS}
@@ -194,6 +229,11 @@ def summarize(rows: List[Dict]) -> Dict:
             "radius_p90": float(np.percentile(radius, 90)) if radius else None,
             "radius_within_0.2": float(np.mean(np.array(radius) <= 0.002)) if radius else None,
             "radius_within_1": float(np.mean(np.array(radius) <= 0.01)) if radius else None,
+            "radius_shift_median": float(np.median(shift)) if shift else None,
+            "radius_shift_p90": float(np.percentile(shift, 90)) if shift else None,
+            "radius_vs_sampled_median": float(np.median(vs_sampled)) if vs_sampled else None,
+            "radius_vs_sampled_p90": float(np.percentile(vs_sampled, 90)) if vs_sampled else None,
+            "radius_vs_sampled_within_1": float(np.mean(np.array(vs_sampled) <= 0.01)) if vs_sampled else None,
             "axis_median": float(np.median(axis)) if axis else None,
             "axis_p90": float(np.percentile(axis, 90)) if axis else None,
             "axis_within_0.1": float(np.mean(np.array(axis) <= 0.1)) if axis else None,
@@ -246,6 +286,17 @@ def markdown(results: Dict) -> str:
             f"{_f(s['deviation_max_median'], '{:.3f} %', 100)} | {_f(s['deviation_rms_median'], '{:.4f} %', 100)} | "
             f"{_f(s['input_rms_median'], '{:.4f} %', 100)} | {s['feature_seconds']:.2f} s |")
     add("")
+    shifted = [(v, s) for v, s in results["summary"].items() if s.get("radius_shift_median") is not None]
+    if shifted:
+        add("How far the perturbation itself moves each radius (the true radius against the one the perturbed "
+            "surface has: the true radius moved by the mean displacement of the face's vertices along their "
+            "normals; undulations longer than a face move it as a whole), and the radius error against that "
+            "sampled radius, median / p90 (share within 1 %): " + "; ".join(
+                f"{v}: moved {_f(s['radius_shift_median'], '{:.3f} %', 100)} / {_f(s['radius_shift_p90'], '{:.3f} %', 100)}, "
+                f"error against it {_f(s['radius_vs_sampled_median'], '{:.3f} %', 100)} / "
+                f"{_f(s['radius_vs_sampled_p90'], '{:.3f} %', 100)} ({_f(s['radius_vs_sampled_within_1'], '{:.0f} %', 100)})"
+                for v, s in shifted) + ".")
+        add("")
     add("Deviations in % of the bounding-box diagonal. Type confusion (ground truth → found, correctly segmented faces):")
     add("")
     for variant, s in results["summary"].items():

@@ -123,3 +123,34 @@ def test_summarize_adds_counts():
     s = scoring.summarize([a, b])
     assert (s["faces"], s["correct"], s["under"], s["meshes"]) == (5, 2, 3, 2)
     assert s["correct_fraction"] == pytest.approx(0.4)
+
+
+def test_sampled_radius_follows_the_displacement_outwards():
+    """The feature benchmark's radius of a perturbed face: the true radius moved by the mean
+    displacement along the normals, outwards from the axis (a boss grows, a hole shrinks), the
+    centre or the tube circle."""
+    import shapes
+    run_features = shapes.bench_module("run_features")
+    t = np.linspace(0.0, 2.0 * np.pi, 40, endpoint=False)
+    ring = np.column_stack([np.cos(t), np.sin(t), np.zeros_like(t)])
+    heights = np.repeat(np.linspace(0.0, 4.0, 5), len(t))
+    radial = np.tile(ring, (5, 1))
+    boss = 2.0 * radial + np.outer(heights, [0, 0, 1]) + [1.0, -1.0, 0.0]
+    cylinder = {"type": "cylinder", "params": {"axis": [0, 0, 2], "point": [1.0, -1.0, 7.0], "radius": 2.0}}
+    every = np.arange(len(boss))
+    shift = np.full(len(boss), 0.05)
+    shift[::2] = 0.03  # the mean counts, not each vertex
+    assert run_features.sampled_radius(cylinder, boss, radial, shift, every) == pytest.approx(2.04)
+    assert run_features.sampled_radius(cylinder, boss, -radial, shift, every) == pytest.approx(1.96)
+    assert run_features.sampled_radius(cylinder, boss, radial, shift, every[:2]) == pytest.approx(2.04)
+
+    sphere = {"type": "sphere", "params": {"center": [0, 0, 0], "radius": 3.0}}
+    assert run_features.sampled_radius(sphere, 3.0 * radial, -radial, shift, every) == pytest.approx(2.96)
+
+    # A torus about z, tube circle of radius 5 in z = 0, tube radius 1: points on its outer equator
+    # and top, normals out of the tube.
+    tube = np.vstack([6.0 * ring, 5.0 * ring + [0, 0, 1]])
+    normals = np.vstack([ring, np.tile([0.0, 0.0, 1.0], (len(t), 1))])
+    torus = {"type": "torus", "params": {"axis": [0, 0, 1], "center": [0, 0, 0], "major": 5.0, "minor": 1.0}}
+    assert run_features.sampled_radius(torus, tube, normals, np.full(len(tube), 0.1),
+                                       np.arange(len(tube))) == pytest.approx(1.1)

@@ -29,7 +29,8 @@ struct RefinementOptions {
 
 struct RefinedMesh {
   TriangleMesh mesh;
-  std::vector<int> face_origin;  // refined face -> input face
+  std::vector<int> face_origin;  // refined face -> input face (the pieces of each input face consecutive,
+                                 // in the input's face order; new vertices after the input's)
   double target_edge_length = 0.0;
 };
 
