@@ -83,15 +83,19 @@ def axis_angle_degrees(a, b) -> float:
     return float(np.degrees(np.arccos(min(1.0, c))))
 
 
+def radius_of(params: Dict) -> float:
+    """The radius that is scored: a cylinder's or sphere's, a torus's tube (minor) radius."""
+    return params["minor"] if "minor" in params else params["radius"]
+
+
 def parameter_errors(gt_surface: Dict, feature: Dict) -> Dict:
     """Relative radius errors, the half-angle error of cones (degrees) and the axis error (degrees)."""
     g, f = gt_surface["params"], feature["params"]
     kind = gt_surface["type"]
     out: Dict = {}
-    if kind in ("cylinder", "sphere"):
-        out["radius"] = abs(f["radius"] - g["radius"]) / g["radius"]
-    elif kind == "torus":
-        out["radius"] = abs(f["minor"] - g["minor"]) / g["minor"]
+    if kind in ("cylinder", "sphere", "torus"):
+        out["radius"] = abs(radius_of(f) - radius_of(g)) / radius_of(g)
+    if kind == "torus":
         out["major"] = abs(f["major"] - g["major"]) / max(g["major"], 1e-12)
     elif kind == "cone":
         out["half_angle_degrees"] = abs(np.degrees(f["half_angle"] - g["half_angle"]))
@@ -111,18 +115,15 @@ def sampled_radius(gt_surface: Dict, unperturbed: np.ndarray, normals: np.ndarra
     g, kind = gt_surface["params"], gt_surface["type"]
     p = unperturbed[vertices]
     if kind == "sphere":
-        radial, radius = p - np.asarray(g["center"]), g["radius"]
+        radial = p - np.asarray(g["center"])
     else:
         axis = np.asarray(g["axis"], float) / np.linalg.norm(g["axis"])
         offset = p - np.asarray(g["center" if kind == "torus" else "point"])
-        across = offset - np.outer(offset @ axis, axis)
+        radial = offset - np.outer(offset @ axis, axis)
         if kind == "torus":
-            tube = across / np.linalg.norm(across, axis=1)[:, None] * g["major"]
-            radial, radius = offset - tube, g["minor"]
-        else:
-            radial, radius = across, g["radius"]
+            radial = offset - radial / np.linalg.norm(radial, axis=1)[:, None] * g["major"]
     outwards = np.sign(np.einsum("ij,ij->i", radial, normals[vertices]).mean())
-    return radius + outwards * float(displacement[vertices].mean())
+    return radius_of(g) + outwards * float(displacement[vertices].mean())
 
 
 def relation_counts(layer, gt_info: Dict, correct: Dict[int, int], diag: float) -> Dict:
@@ -171,8 +172,7 @@ def bench_mesh(m, gt_info: Dict) -> Dict:
         if feature["type"] == gt_surface["type"] and gt_surface["type"] != "freeform":
             entry.update(parameter_errors(gt_surface, feature))
             if "radius" in entry and m.unperturbed is not None:
-                true = gt_surface["params"].get("minor", gt_surface["params"].get("radius"))
-                found = feature["params"].get("minor", feature["params"].get("radius"))
+                true, found = radius_of(gt_surface["params"]), radius_of(feature["params"])
                 sampled = sampled_radius(gt_surface, m.unperturbed, normals, displacement,
                                          np.unique(m.F[m.gt == face]))
                 entry["radius_shift"] = abs(sampled - true) / true

@@ -6,28 +6,24 @@
 
 namespace idealize {
 
-namespace {
-
-// Compressed "vertex -> incident faces" lists, built by counting sort (linear time).
-void build_vertex_faces(const MatrixX3i& F, int num_vertices, std::vector<int>& offsets,
-                        std::vector<int>& faces) {
-  offsets.assign(num_vertices + 1, 0);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) ++offsets[F(f, c) + 1];
+void group_by_key(const int* keys, size_t count, int key_count, std::vector<int>& offsets, std::vector<int>& items) {
+  offsets.assign(key_count + 1, 0);
+  for (size_t i = 0; i < count; ++i)
+    if (keys[i] >= 0) ++offsets[keys[i] + 1];
   std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
-  faces.resize(offsets.back());
+  items.resize(offsets.back());
   std::vector<int> cursor(offsets.begin(), offsets.end() - 1);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) faces[cursor[F(f, c)]++] = static_cast<int>(f);
+  for (size_t i = 0; i < count; ++i)
+    if (keys[i] >= 0) items[cursor[keys[i]]++] = static_cast<int>(i);
 }
-
-}  // namespace
 
 MeshTopology::MeshTopology(const TriangleMesh& mesh) {
   const MatrixX3i& F = mesh.F;
   const int nv = mesh.num_vertices();
   const int nf = mesh.num_faces();
-  build_vertex_faces(F, nv, vertex_face_offsets_, vertex_faces_);
+  // The corners of each vertex (3 * face + corner, rows of F being row-major), then their faces.
+  group_by_key(F.data(), 3 * static_cast<size_t>(nf), nv, vertex_face_offsets_, vertex_faces_);
+  for (int& corner : vertex_faces_) corner /= 3;
 
   // Half-edges bucketed by their smaller vertex; within a bucket sorted by the larger one, so
   // equal keys are adjacent and become one edge. Linear apart from tiny per-vertex sorts.

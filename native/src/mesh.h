@@ -72,6 +72,11 @@ class MeshTopology {
   int num_nonmanifold_edges_ = 0;
 };
 
+// Items 0 .. count-1 grouped by their key (0 <= keys[i] < key_count; items of negative key are left
+// out), in item order within a group (a stable counting sort): group k is
+// items[offsets[k] .. offsets[k + 1]).
+void group_by_key(const int* keys, size_t count, int key_count, std::vector<int>& offsets, std::vector<int>& items);
+
 // Connected components, through manifold edges, of faces of equal class; faces of negative class
 // belong to none (-1). Returns the number of components and writes one id per face. A class
 // vector of zeros gives the shells of the mesh.

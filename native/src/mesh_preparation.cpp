@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <limits>
 #include <string>
-#include <numeric>
 #include <tuple>
 
 namespace idealize {
@@ -109,8 +108,7 @@ PreparedMesh prepare_mesh(const TriangleMesh& input, const ProgressSpan& progres
   // Sorted vertex triples, bucketed by their smallest vertex: a face repeats the first face of its
   // bucket with the same triple (linear apart from small per-bucket sorts, and in input order).
   std::vector<std::array<int, 3>> triple(nf);
-  std::vector<int> bucket_offsets(nv + 1, 0);
-  std::vector<int> first(nf, -1);  // input face -> the input face it repeats (itself if kept)
+  std::vector<int> smallest(nf, -1);  // a degenerate face has none: it joins no bucket
   for (int f = 0; f < nf; ++f) {
     progress.tick(f, nf);
     const int a = input.F(f, 0), b = input.F(f, 1), c = input.F(f, 2);
@@ -121,16 +119,12 @@ PreparedMesh prepare_mesh(const TriangleMesh& input, const ProgressSpan& progres
     }
     triple[f] = {a, b, c};
     std::sort(triple[f].begin(), triple[f].end());
-    ++bucket_offsets[triple[f][0] + 1];
-    first[f] = f;
+    smallest[f] = triple[f][0];
   }
-  std::partial_sum(bucket_offsets.begin(), bucket_offsets.end(), bucket_offsets.begin());
-  std::vector<int> bucketed(bucket_offsets.back());
-  {
-    std::vector<int> cursor(bucket_offsets.begin(), bucket_offsets.end() - 1);
-    for (int f = 0; f < nf; ++f)
-      if (first[f] >= 0) bucketed[cursor[triple[f][0]]++] = f;
-  }
+  std::vector<int> bucket_offsets, bucketed;
+  group_by_key(smallest.data(), smallest.size(), nv, bucket_offsets, bucketed);
+  std::vector<int> first(nf, -1);  // input face -> the input face it repeats (itself if kept)
+  for (int f : bucketed) first[f] = f;
   for (int v = 0; v < nv; ++v) {
     progress.poll(v);
     const auto begin = bucketed.begin() + bucket_offsets[v], end = bucketed.begin() + bucket_offsets[v + 1];

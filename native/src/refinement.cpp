@@ -101,11 +101,8 @@ class Refiner {
   // across memory (a quarter of a million-triangle scan's faces are such pieces).
   RefinedMesh result(int input_vertices, int input_faces) const {
     const int nf = static_cast<int>(faces_.size());
-    std::vector<int> start(input_faces + 1, 0);
-    for (int f = 0; f < nf; ++f) ++start[origin_[f] + 1];
-    for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
-    std::vector<int> order(nf);
-    for (int f = 0; f < nf; ++f) order[start[origin_[f]]++] = f;
+    std::vector<int> start, order;
+    group_by_key(origin_.data(), origin_.size(), input_faces, start, order);
     std::vector<int> vertex_index(points_.size(), -1);
     for (int v = 0; v < input_vertices; ++v) vertex_index[v] = v;
     int next_vertex = input_vertices;
@@ -121,7 +118,7 @@ class Refiner {
       }
       out.face_origin[i] = origin_[f];
     }
-    out.mesh.V.resize(static_cast<Eigen::Index>(points_.size()), 3);
+    out.mesh.V.resize(next_vertex, 3);
     for (size_t v = 0; v < points_.size(); ++v)
       if (vertex_index[v] >= 0) out.mesh.V.row(vertex_index[v]) = points_[v].transpose();
     return out;
