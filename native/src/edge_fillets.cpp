@@ -416,6 +416,19 @@ std::optional<Fillet> fit_fillet(const Wedge& w, const std::vector<Vector2>& poi
   return best;
 }
 
+// The robust spread (σ for Gaussian residuals) of `points` from the wedge as `fillet` rounds it,
+// to set beside the features' own spreads: the band may hold a few faces of a surface beyond the
+// features' ends (a blend at a short cylinder's other end), which its RMS would count in full.
+double rounded_spread(const Wedge& w, const Fillet& fillet, const std::vector<Vector2>& points) {
+  const Rounding g = round_wedge(w, fillet.offset, fillet.radius);
+  std::vector<double> distances;
+  Vector2 gradient;
+  for (const Vector2& x : points) distances.push_back(std::abs(residual(w, g, x, gradient)));
+  if (distances.empty()) return 0.0;
+  std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
+  return 1.4826 * distances[distances.size() / 2];
+}
+
 // A circle of the section continued, past the point where its outward normal is `normal`, by its
 // tangent line running along `along` (perpendicular to it): points past that point along `along`
 // lie on the line, the others on the circle. `circle`: centre (2) and radius.
@@ -647,7 +660,7 @@ std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topo
     // less the opening).
     const double effective = std::max(independent * n, 2.0);
     if (!(independent * (fillet->sharp - fillet->rounded) > std::log(effective) * variance) ||
-        std::sqrt(variance) > options.residual_ratio * spread ||
+        rounded_spread(w, *fillet, sample) > options.residual_ratio * spread ||
         fillet->radius * (M_PI - w.opening) < options.shortest_arc * edge)
       continue;
 

@@ -1767,6 +1767,30 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     stage("edge_fillets");
   }
 
+  // On a noisy mesh, a cone whose radius changes across its patch by less than the distance
+  // tolerance, and which a cylinder fits about as well (identification's rule), is a cylinder: the
+  // undulation of a sculpted cylinder tilts its profile by a fraction of a degree, and merging or
+  // the edge stages refit a cone as a cone.
+  if (!exact_mesh && std::any_of(layer.features.begin(), layer.features.end(),
+                                 [](const Feature& f) { return f.type == SurfaceType::Cone; })) {
+    const std::vector<PatchPoints> cone_points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+    const double normal_floor = options.normal_floor_degrees * M_PI / 180.0;
+    for (size_t p = 0; p < layer.features.size(); ++p) {
+      Feature& f = layer.features[p];
+      if (f.type != SurfaceType::Cone) continue;
+      const Eigen::VectorXd heights = (cone_points[p].points.rowwise() - f.surface.point.transpose()) * f.surface.axis;
+      if (heights.size() == 0 ||
+          (heights.maxCoeff() - heights.minCoeff()) * std::tan(f.surface.half_angle) > layer.distance_tolerance)
+        continue;
+      const SurfaceFit about = fit_about_axis(SurfaceType::Cylinder, cone_points[p], f.surface.point, f.surface.axis);
+      if (!about.valid) continue;
+      const SurfaceFit cylinder = fit_surface(SurfaceType::Cylinder, cone_points[p], options.fit, &about.surface);
+      if (cylinder.valid && cylinder.spread <= options.residual_ratio * f.spread + layer.distance_tolerance &&
+          cylinder.normal_spread <= options.residual_ratio * f.normal_spread + normal_floor)
+        f.set_fit(cylinder);
+    }
+  }
+
   // Freeform: the best fit is much worse than the typical patch of this mesh (which takes a few
   // patches to tell; with fewer, the tolerances alone decide).
   std::vector<double> residuals;
