@@ -286,25 +286,6 @@ std::vector<int> distinct_vertices(const TriangleMesh& mesh, const std::vector<i
   return vertices;
 }
 
-// The share of a mesh's residuals that counts as independent evidence, (1 - rho) / (1 + rho), rho
-// being the correlation of the plane features' residuals at the ends of their mesh edges: about 0
-// for a scan's independent noise, near 1 for a sculpted part's smooth undulation (measured on the
-// benchmark: 0.02-0.27 on the scans, 0.74-0.87 sculpted).
-double independent_share(const TriangleMesh& mesh, const std::vector<Feature>& features,
-                         const std::vector<int>& labels) {
-  double product = 0.0, square = 0.0;
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    if (labels[f] < 0 || features[labels[f]].type != SurfaceType::Plane) continue;
-    const Surface& plane = features[labels[f]].surface;
-    std::array<double, 3> r;
-    for (int k = 0; k < 3; ++k) r[k] = (mesh.V.row(mesh.F(f, k)).transpose() - plane.point).dot(plane.axis);
-    product += r[0] * r[1] + r[1] * r[2] + r[2] * r[0];
-    square += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-  }
-  const double rho = square > 0.0 ? std::clamp(product / square, 0.0, 1.0) : 0.0;
-  return (1.0 - rho) / (1.0 + rho);
-}
-
 // The median spread of the features that have a surface (0 if none).
 double typical_feature_spread(const std::vector<Feature>& features) {
   std::vector<double> spreads;
@@ -578,6 +559,22 @@ void split_feature(size_t t, const std::vector<Surface>& surfaces, const std::ve
 }
 
 }  // namespace
+
+double independent_share(const TriangleMesh& mesh, const std::vector<Feature>& features,
+                         const std::vector<int>& labels) {
+  double product = 0.0, square = 0.0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (labels[f] < 0 || features[labels[f]].type != SurfaceType::Plane) continue;
+    const Surface& plane = features[labels[f]].surface;
+    std::array<double, 3> r;
+    for (int k = 0; k < 3; ++k) r[k] = (mesh.V.row(mesh.F(f, k)).transpose() - plane.point).dot(plane.axis);
+    product += r[0] * r[1] + r[1] * r[2] + r[2] * r[0];
+    square += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+  }
+  const double rho = square > 0.0 ? std::clamp(product / square, 0.0, 1.0) : 0.0;
+  return (1.0 - rho) / (1.0 + rho);
+}
+
 
 std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topology, const EdgeFilletOptions& options,
                               std::vector<Feature>& features, std::vector<int>& labels) {

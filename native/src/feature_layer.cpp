@@ -1858,12 +1858,20 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     if (exact_mesh) ideal.points = &whole;
     if (idealize_features(layer.features, layer.relations, ideal) > 0) {
       // An ideal surface must still describe its patch: where it fits clearly worse than the fitted
-      // one (a direction that only looked ideal, radii that only looked equal), the fit stays.
+      // one (a direction that only looked ideal, radii that only looked equal), the fit stays. A
+      // sculpted part's smooth undulation moves every fit a little (a fillet's axis by a degree or
+      // two), which the ideal surface does not follow, and a fit that stays meets its tangent
+      // neighbours nowhere: the more the mesh's residuals are correlated (the share of them that is
+      // not independent noise), the more of the distance tolerance the ideal one may deviate by in
+      // addition. (Measured on the benchmark's sculpted parts: 11 -> 12 of 23 solids with the true
+      // surface types, and the scans' and CAD exports' solids unchanged.)
       points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+      const double ideal_slack =
+          exact_mesh ? 0.0 : (1.0 - independent_share(mesh, fitted, layer.labels)) * layer.distance_tolerance;
       auto misfit = [&](size_t p, const Surface& surface) {
         double rms, max_error;
         fit_residuals(surface, points[p].points, points[p].weights, rms, max_error);
-        return rms > options.residual_ratio * fitted[p].rms + fitted[p].spread + floor;  // + one σ of noise
+        return rms > options.residual_ratio * fitted[p].rms + fitted[p].spread + floor + ideal_slack;  // + one σ of noise
       };
       // A direction that snapped to one of the part's ideal ones only by the angle tolerance (a face
       // designed at 25° snaps to 30°) moves the features tangent to it too: once more, with the
