@@ -575,7 +575,6 @@ double independent_share(const TriangleMesh& mesh, const std::vector<Feature>& f
   return (1.0 - rho) / (1.0 + rho);
 }
 
-
 std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topology, const EdgeFilletOptions& options,
                               std::vector<Feature>& features, std::vector<int>& labels) {
   std::vector<char> changed(features.size(), 0);
