@@ -1871,7 +1871,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       auto misfit = [&](size_t p, const Surface& surface) {
         double rms, max_error;
         fit_residuals(surface, points[p].points, points[p].weights, rms, max_error);
-        return rms > options.residual_ratio * fitted[p].rms + fitted[p].spread + floor + ideal_slack;  // + one σ of noise
+        // (The fit's spread: one σ of noise more; then the slack for correlated residuals.)
+        return rms > options.residual_ratio * fitted[p].rms + fitted[p].spread + floor + ideal_slack;
       };
       // A direction that snapped to one of the part's ideal ones only by the angle tolerance (a face
       // designed at 25° snaps to 30°) moves the features tangent to it too: once more, with the
