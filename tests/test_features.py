@@ -413,13 +413,13 @@ def test_fillets_beside_tori_of_the_benchmarks_boxblend_scan():
     their radius, which a cylinder explains near their tangent border. Grown from a disc, each
     fillet's region crept into the torus and its refit bent towards it, until it held neither;
     growth now stops at the last region its surface fitted. Each fillet is one cylinder of the
-    part's radius along x, holding the face."""
+    part's radius (5.08; 5.06 since the bends are tori, 5.00 before) along x, holding the face."""
     m = shapes.benchmark_mesh("as_bb_boxblend_03.stp", "scan")
     layer = idealize.idealize(idealize.Mesh(m.V, m.F))
     areas = shapes.triangle_areas(m.V, m.F)
     found = dominant(layer, m.gt, areas)
     along_x = [face for face, kind in enumerate(m.face_types) if kind == "Cylinder" and found[face] is not None
-               and found[face]["type"] == "cylinder" and abs(found[face]["params"]["radius"] / 5 - 1) < 0.01
+               and found[face]["type"] == "cylinder" and abs(found[face]["params"]["radius"] / 5.08 - 1) < 0.02
                and axis_angle(found[face]["params"]["axis"], [1, 0, 0]) < np.radians(0.5)]
     correct = 0
     for face in along_x:
@@ -1137,3 +1137,57 @@ def test_cylinder_that_a_sculpted_undulation_tilts_into_a_cone_is_a_cylinder():
              layer.features[e["best_patch"]]["type"] != truth["faces"][e["face"]]["type"]]
     assert not wrong
     assert sum(e["status"] == "correct" for e in score["per_face"]) == score["faces"]
+
+
+def bent_rod():
+    """A rod of r 5 bent through 90° about a radius of 15 between two straight runs of 40: cylinder,
+    torus, cylinder, tangent where they meet, and two flat ends."""
+    FreeCAD, Part, _ = shapes.freecad()
+    V = FreeCAD.Vector
+    first = Part.makeCylinder(5, 40, V(-40, 0, 0), V(1, 0, 0))
+    bend = Part.makeTorus(15, 5, V(0, 15, 0), V(0, 0, 1), -180, 180, 90)
+    bend.rotate(V(0, 15, 0), V(0, 0, 1), -90)
+    second = Part.makeCylinder(5, 40, V(15, 15, 0), V(0, 1, 0))
+    return first.fuse(bend).fuse(second).removeSplitter()
+
+
+@needs_freecad
+@pytest.mark.parametrize("seed", [1, 2])
+def test_bend_of_a_noisy_scanned_rod_is_a_torus_tangent_to_both_runs(seed):
+    """Across the bend of a rod, the tube's circle has the straight runs' radius: segmentation joins
+    bend and runs in one patch, and the cylinders grown in it each reach into the bend by as much as
+    the noise hides. The torus touches them where a meridian plane of it crosses their axes: that
+    tangency moves the border there (before: the bend's torus held 78-81 % of it)."""
+    solid = bent_rod()
+    V, F, gt, diag = shapes.uniform_remesh(solid)
+    V = shapes.normal_noise(V, F, diag, seed)
+    layer = idealize.idealize(idealize.Mesh(V, F))
+    areas = shapes.triangle_areas(V, F)
+    assert layer.type_counts() == {"plane": 2, "cylinder": 2, "torus": 1}
+    faces = dominant(layer, gt, areas)
+    kinds = [FREECAD_TYPES[type(face.Surface).__name__] for face in solid.Faces]
+    assert [f["type"] for f in faces] == kinds
+    bend = kinds.index("torus")
+    held = areas[(gt == bend) & (layer.labels == faces[bend]["id"])].sum() / areas[gt == bend].sum()
+    assert held > 0.97, held
+    tangent = {frozenset(r["features"]) for r in layer.relations if r["kind"] == "tangent"}
+    runs = [f["id"] for f in faces if f["type"] == "cylinder"]
+    assert {frozenset((faces[bend]["id"], run)) for run in runs} <= tangent, layer.relations
+
+
+@needs_freecad
+@shapes.needs_shared_data
+@pytest.mark.parametrize("name, radii", [("as_bb_boxblend_03.stp", (10.16, 5.08)),
+                                         ("as_circular_blend_01.step", (28.0366, 13.4906))])
+def test_tori_that_a_scans_histogram_cut_into_cylinder_sectors_are_tori(name, radii):
+    """The benchmark's scans of as_bb_boxblend_03 (a rod of r 5.08 bent about 10.16) and
+    as_circular_blend_01 (a round of r 13.49 along a circle of 28.04): the histogram joins each bend
+    with the cylinders beside it, or the round with the plane, and cylinders grown in the patch fit
+    sectors of the torus within the tolerance. Where a sector with as many faces again beyond it
+    fits no cylinder but a torus bending across the cylinder's axis, it grows as that torus (before:
+    none of these tori correct)."""
+    _, layer, truth, score = benchmark_surface_score(name, "scan")
+    tori = [e for e in score["per_face"] if truth["faces"][e["face"]]["type"] == "torus" and
+            np.allclose([truth["faces"][e["face"]]["params"][k] for k in ("major", "minor")], radii, rtol=1e-3)]
+    assert tori and any(e["status"] == "correct" and layer.features[e["best_patch"]]["type"] == "torus"
+                        for e in tori), tori

@@ -22,7 +22,8 @@ Eigen::Vector3d oriented_normal(const Feature& feature, const Eigen::Vector3d& p
 // Whether two features' surfaces touch along a curve, as a blend touches the faces it rounds: a
 // plane and a cylinder whose axis lies one radius from it; a sphere and a cylinder of its radius
 // through its centre, or a plane one radius from its centre; a torus and a plane normal to its
-// axis one tube radius from its centre, or a coaxial cylinder on its tube's inner or outer circle.
+// axis one tube radius from its centre, or a coaxial cylinder on its tube's inner or outer circle,
+// or a cylinder of its tube's radius whose axis touches its centre circle (a bent tube's run).
 // Each within the distance tolerance or the radius tolerance. On a scan the faces of a blend take
 // a few degrees of each other's arcs, so the normals at the patch boundary differ by more than the
 // angle tolerance although the surfaces are tangent.
@@ -46,9 +47,17 @@ bool surfaces_touch(const Feature& fa, const Feature& fb, double angle_tolerance
       return false;
     case SurfaceType::Cylinder:
       if (b.type == SurfaceType::Sphere) return near(off_axis, b.radius) && near(a.radius - b.radius, b.radius);
-      if (b.type == SurfaceType::Torus)
-        return parallel(a.axis, b.axis) && near(off_axis, b.minor) &&
-               (near(a.radius - (b.radius + b.minor), b.minor) || near(a.radius - (b.radius - b.minor), b.minor));
+      if (b.type == SurfaceType::Torus) {
+        if (parallel(a.axis, b.axis))
+          return near(off_axis, b.minor) &&
+                 (near(a.radius - (b.radius + b.minor), b.minor) || near(a.radius - (b.radius - b.minor), b.minor));
+        // A straight tube running into a bend: the cylinder's axis touches the torus's centre
+        // circle (in its plane, up to what the axis tolerance tilts it by there), radius its tube.
+        const double tilt = b.radius * std::sin(angle_tolerance);
+        return std::abs(a.axis.dot(b.axis)) <= std::sin(angle_tolerance) && near(a.radius - b.minor, b.minor) &&
+               std::abs((a.point - b.point).dot(b.axis)) <= tilt + std::max(distance_tolerance, radius_tolerance * b.minor) &&
+               near(off_axis - b.radius, b.radius);
+      }
       return false;
     default:
       return false;

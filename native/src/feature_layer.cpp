@@ -931,11 +931,13 @@ double bend(const Surface& surface, const FitData& data) {
 // label_remainder (a corner ball between fillets, a small boss on a plate), and the reassignment
 // that follows moves rim faces to the surfaces that explain them. A growing region's refit that no
 // longer fits within `fits_below` (and has drifted by more than the noise from its disc's fit) ends
-// its growth at the last region that did.
+// its growth at the last region that did. A region that grew on as a torus (a sector of a tube's
+// bend, below) is entered in `generalized` (new id -> its torus).
 int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
                         double normal_noise, double fits_below, int min_region_faces,
                         const std::function<Feature(const PatchPoints&)>& identify_points, const FitOptions& fit_options,
-                        std::vector<int>& labels, int next_id, const ProgressSpan& progress) {
+                        std::vector<int>& labels, int next_id, std::map<int, Surface>& generalized,
+                        const ProgressSpan& progress) {
   // Depth of every face of the patch: edge steps from its rim (multi-source breadth-first search).
   std::vector<int> depth(mesh.num_faces(), -1), queue, faces;
   for (int f = 0; f < mesh.num_faces(); ++f) {
@@ -1023,6 +1025,7 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
     // near their tangent border, and the refit bent towards it) ends growth at the last region
     // that fitted.
     const double disc_rms = feature.rms;
+    const SurfaceType disc_type = feature.type;
     Feature fitting = feature;
     size_t fitting_size = region.size();
     bool overgrown = false;
@@ -1035,9 +1038,40 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
       fitting = feature;
       fitting_size = region.size();
     };
+    // A cylinder grown on a sector of a tube's bend (a torus whose tube it approximates, the
+    // histogram having cut the bend up) stops, or overgrows, where the bend turns away from it.
+    // Where the region together with as many faces again beyond it fits no cylinder as well as its
+    // disc did, but a ring torus bending across the cylinder's axis (not a barrel about it) does, it
+    // grows on as that torus.
+    auto generalize = [&] {
+      if (feature.type != SurfaceType::Cylinder) return false;
+      std::vector<int> wider = region;
+      for (size_t head = 0; head < wider.size() && wider.size() < 2 * region.size(); ++head)
+        for (int c = 0; c < 3; ++c) {
+          const int g = topology.face_neighbor(wider[head], c);
+          if (g >= 0 && labels[g] == patch && !in_region[g]) {
+            in_region[g] = 1;
+            wider.push_back(g);
+          }
+        }
+      for (size_t i = region.size(); i < wider.size(); ++i) in_region[wider[i]] = 0;
+      const FitData wider_points = all_points(wider);
+      const double as_well = std::min(fits_below, disc_rms + noise);
+      const SurfaceFit straight = fit_surface(SurfaceType::Cylinder, wider_points, fit_options, &feature.surface);
+      if (straight.valid && straight.rms <= disc_rms + noise) return false;
+      const SurfaceFit torus = fit_surface(SurfaceType::Torus, wider_points, fit_options);
+      if (!torus.valid || torus.rms > as_well || torus.surface.radius < torus.surface.minor ||
+          std::abs(torus.surface.axis.dot(feature.surface.axis)) > std::sqrt(0.5))
+        return false;
+      feature.set_fit(torus);
+      fitting = feature;
+      fitted = fitting_size = region.size();
+      overgrown = false;
+      return true;
+    };
     // When growth stops, the surface refitted to all it took may explain more (a disc across a
     // narrow fillet fixes its radius only roughly): growth resumes while refits add to it.
-    while (!overgrown) {
+    for (bool growing = true; growing;) {
       for (size_t head = 0; head < region.size() && !overgrown; ++head) {
         progress.poll(++visited, 1 << 12);
         for (int c = 0; c < 3 && !overgrown; ++c) {
@@ -1048,8 +1082,11 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
           if (region.size() >= 2 * fitted) refit();  // refit as the region doubles
         }
       }
-      if (overgrown || region.size() <= fitted + fitted / 8) break;  // (bounded rounds: each grows it by an eighth)
-      refit();
+      if (!overgrown && region.size() > fitted + fitted / 8) {  // (bounded rounds: each grows it by an eighth)
+        refit();
+        continue;
+      }
+      growing = generalize();
     }
     if (overgrown) {  // (breadth-first: the first faces of the region are connected)
       for (size_t i = fitting_size; i < region.size(); ++i) in_region[region[i]] = 0;
@@ -1059,6 +1096,7 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
     for (int f : region) in_region[f] = 0;
     if (static_cast<int>(region.size()) < min_region_faces) continue;
     for (int f : region) labels[f] = next_id;
+    if (feature.type != disc_type) generalized[next_id] = feature.surface;
     ++next_id;
   }
   if (next_id == first_id) return next_id;  // nothing split off: the patch stays whole
@@ -1512,6 +1550,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
           if (!badly_fitting(torus)) layer.features[p] = torus;
         }
       }
+      std::map<int, Surface> generalized;  // regions that grew as a more general surface than their disc's
       // Grows the surfaces that fit discs of patch p. A patch that the histograms call curved has no
       // planar regions: across a disc, the sag of a large fillet hides within the distance tolerance.
       auto grow_surfaces = [&](int p, const ProgressSpan& span) {
@@ -1522,7 +1561,18 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
               return identify(pp, curvature[p], zero_mean_curvature, options, layer.distance_tolerance,
                               curved);
             },
-            options.fit, layer.labels, next_id, span);
+            options.fit, layer.labels, next_id, generalized, span);
+      };
+      // Identification takes the simplest surface within the tolerance, which on a sector of a
+      // tube's bend is a cylinder: a region that grew as a torus (above) stays one where the torus
+      // still fits it as a split requires.
+      auto keep_generalized = [&] {
+        for (const auto& [id, surface] : generalized) {
+          Feature& f = layer.features[id];
+          if (f.type != SurfaceType::Cylinder) continue;
+          const SurfaceFit fit = fit_surface(surface.type, points[id], options.fit, &surface);
+          if (fit.valid && fit.rms <= split_above) f.set_fit(fit);
+        }
       };
       // On a noisy mesh, surfaces grow in a large patch first (fillets of one radius in a chain);
       // planar regions split the rest.
@@ -1551,6 +1601,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         split.step(0.5);
         points = patch_points(mesh, layer.labels, next_id);
         identify_all(points, which, split.sub(0.6, 0.8));
+        keep_generalized();
       }
       // On a noisy mesh, a large piece that still no surface fits is split by growing surfaces.
       if (!exact_mesh) {
@@ -1568,6 +1619,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         if (next_id > pieces) {
           points = patch_points(mesh, layer.labels, next_id);
           identify_all(points, which, split.sub(0.9, 1.0));
+          keep_generalized();
         }
       }
     }
