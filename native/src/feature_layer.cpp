@@ -932,7 +932,8 @@ double bend(const Surface& surface, const FitData& data) {
 // that follows moves rim faces to the surfaces that explain them. A growing region's refit that no
 // longer fits within `fits_below` (and has drifted by more than the noise from its disc's fit) ends
 // its growth at the last region that did. A region that grew on as a torus (a sector of a tube's
-// bend, below) is entered in `generalized` (new id -> its torus).
+// bend, below) is entered in `generalized` (new id -> its torus), and the patch is split once more
+// with the tori grown first.
 int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
                         double normal_noise, double fits_below, int min_region_faces,
                         const std::function<Feature(const PatchPoints&)>& identify_points, const FitOptions& fit_options,
@@ -987,31 +988,13 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
   };
   auto fits = [&](const Feature& f) { return f.type != SurfaceType::Freeform && f.rms <= fits_below; };
   long long visited = 0;
-  for (int seed : seeds) {
-    if (labels[seed] != patch || tried[seed]) continue;
-    std::vector<int> region = disc(seed, disc_faces);
-    const FitData disc_points = all_points(region);
+  struct Grown {
+    std::vector<int> faces;
     Feature feature;
-    if (static_cast<int>(region.size()) == disc_faces) feature = identify_points(disc_points);
-    if (static_cast<int>(region.size()) < disc_faces || !fits(feature)) {
-      for (int f : region) tried[f] = 1;
-      continue;
-    }
-    // Across a disc on a narrow fillet the surface may bend by less than the noise: the fit is then
-    // any surface of little curvature (a cylinder of a hundred times the radius, which grows along
-    // the fillet as a flat strip). A larger disc replaces it if its surface fits it and bends by
-    // more than the noise; the disc doubles while it still fits.
-    const bool flat = bend(feature.surface, disc_points) < noise;
-    for (int size = 2 * disc_faces; flat && size <= static_cast<int>(faces.size()); size *= 2) {
-      std::vector<int> larger = disc(seed, size);
-      const FitData larger_points = all_points(larger);
-      const Feature wider = identify_points(larger_points);
-      if (!fits(wider) || wider.rms > std::max(feature.rms, noise)) break;  // it reached another surface
-      if (bend(wider.surface, larger_points) < noise) continue;
-      region = std::move(larger);
-      feature = wider;
-      break;
-    }
+  };
+  std::vector<Grown> tori;  // the regions that grew on as tori
+  // Grows `region` (faces of the patch) as `feature`, fitted to a disc as a `disc_type`.
+  auto grow = [&](std::vector<int> region, Feature feature, SurfaceType disc_type) {
     for (int f : region) tried[f] = in_region[f] = 1;
     size_t fitted = region.size();
     auto explains = [&](int g) {
@@ -1025,7 +1008,6 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
     // near their tangent border, and the refit bent towards it) ends growth at the last region
     // that fitted.
     const double disc_rms = feature.rms;
-    const SurfaceType disc_type = feature.type;
     Feature fitting = feature;
     size_t fitting_size = region.size();
     bool overgrown = false;
@@ -1094,10 +1076,74 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
       feature = fitting;
     }
     for (int f : region) in_region[f] = 0;
-    if (static_cast<int>(region.size()) < min_region_faces) continue;
+    if (static_cast<int>(region.size()) < min_region_faces) return;
     for (int f : region) labels[f] = next_id;
-    if (feature.type != disc_type) generalized[next_id] = feature.surface;
+    if (feature.type != disc_type) {
+      generalized[next_id] = feature.surface;
+      tori.push_back({region, feature});
+    }
     ++next_id;
+  };
+  // A torus found late grows over what the cylinders grown before it left: once one did, the
+  // patch is split again with the tori first.
+  std::vector<int> first_labels;  // of the faces, after the first pass
+  std::map<int, Surface> first_generalized;
+  int first_next = next_id;
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::vector<Grown> first_tori = std::move(tori);
+    tori.clear();
+    if (pass == 1) {
+      if (first_tori.empty()) break;
+      first_next = next_id;
+      first_generalized = generalized;
+      for (int f : faces) {
+        first_labels.push_back(labels[f]);
+        labels[f] = patch;
+      }
+      std::fill(tried.begin(), tried.end(), 0);
+      for (int id = first_id; id < next_id; ++id) generalized.erase(id);
+      next_id = first_id;
+      for (const Grown& torus : first_tori) grow(torus.faces, torus.feature, SurfaceType::Cylinder);
+    }
+    for (int seed : seeds) {
+      if (labels[seed] != patch || tried[seed]) continue;
+      std::vector<int> region = disc(seed, disc_faces);
+      const FitData disc_points = all_points(region);
+      Feature feature;
+      if (static_cast<int>(region.size()) == disc_faces) feature = identify_points(disc_points);
+      if (static_cast<int>(region.size()) < disc_faces || !fits(feature)) {
+        for (int f : region) tried[f] = 1;
+        continue;
+      }
+      // Across a disc on a narrow fillet the surface may bend by less than the noise: the fit is then
+      // any surface of little curvature (a cylinder of a hundred times the radius, which grows along
+      // the fillet as a flat strip). A larger disc replaces it if its surface fits it and bends by
+      // more than the noise; the disc doubles while it still fits.
+      const bool flat = bend(feature.surface, disc_points) < noise;
+      for (int size = 2 * disc_faces; flat && size <= static_cast<int>(faces.size()); size *= 2) {
+        std::vector<int> larger = disc(seed, size);
+        const FitData larger_points = all_points(larger);
+        const Feature wider = identify_points(larger_points);
+        if (!fits(wider) || wider.rms > std::max(feature.rms, noise)) break;  // it reached another surface
+        if (bend(wider.surface, larger_points) < noise) continue;
+        region = std::move(larger);
+        feature = wider;
+        break;
+      }
+      grow(std::move(region), feature, feature.type);
+    }
+  }
+  if (!first_labels.empty()) {
+    // The second pass stands where it explains the patch with no more regions and leaves no more of
+    // its faces to the remainder (a round's torus grown first takes the sectors that cylinders had
+    // cut off the plane beside it).
+    auto left = [&] { return std::count_if(faces.begin(), faces.end(), [&](int f) { return labels[f] == patch; }); };
+    if (next_id > first_next || left() > std::count(first_labels.begin(), first_labels.end(), patch)) {
+      for (size_t i = 0; i < faces.size(); ++i) labels[faces[i]] = first_labels[i];
+      for (int id = first_id; id < next_id; ++id) generalized.erase(id);
+      generalized.insert(first_generalized.begin(), first_generalized.end());
+      next_id = first_next;
+    }
   }
   if (next_id == first_id) return next_id;  // nothing split off: the patch stays whole
   std::vector<char> state(mesh.num_faces(), kOutside);
