@@ -1596,7 +1596,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
           if (!badly_fitting(torus)) layer.features[p] = torus;
         }
       }
-      std::map<int, Surface> generalized;  // regions that grew as a more general surface than their disc's
+      std::map<int, Surface> generalized;  // regions that grew on as tori (id -> torus)
       // Grows the surfaces that fit discs of patch p. A patch that the histograms call curved has no
       // planar regions: across a disc, the sag of a large fillet hides within the distance tolerance.
       auto grow_surfaces = [&](int p, const ProgressSpan& span) {
