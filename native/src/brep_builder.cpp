@@ -336,9 +336,23 @@ Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const s
       return new Geom_Circle(gp_Ax2(to_pnt(o + hit.y() * axis), to_dir(axis), to_dir(seam_direction(axis, x))), hit.x());
     }
   }
+  const bool a_cyl = a.type == SurfaceType::Cylinder, b_cyl = b.type == SurfaceType::Cylinder;
+  // A straight tube running into a bend: a cylinder of the tube's radius whose axis touches the
+  // torus's centre circle touches the torus along the meridian circle through that point.
+  if ((a_cyl && b.type == SurfaceType::Torus) || (b_cyl && a.type == SurfaceType::Torus)) {
+    const Surface& cyl = a_cyl ? a : b;
+    const Surface& torus = a_cyl ? b : a;
+    const Vec3 foot = cyl.point + (torus.point - cyl.point).dot(cyl.axis) * cyl.axis;  // of the centre on the axis
+    const double height = (foot - torus.point).dot(torus.axis);
+    const Vec3 out = foot - torus.point - height * torus.axis;
+    if (std::abs(cyl.axis.dot(torus.axis)) <= angle_eps && std::abs(cyl.radius - torus.minor) <= tol &&
+        std::abs(height) <= tol && std::abs(out.norm() - torus.radius) <= tol && torus.radius > tol) {
+      const Vec3 centre = torus.point + torus.radius * out.normalized();
+      return new Geom_Circle(gp_Ax2(to_pnt(centre), to_dir(cyl.axis), to_dir(torus.axis)), cyl.radius);
+    }
+  }
   // Surfaces along parallel axes (a plane parallel to a cylinder's axis, two parallel cylinders)
   // meet in lines along the axis.
-  const bool a_cyl = a.type == SurfaceType::Cylinder, b_cyl = b.type == SurfaceType::Cylinder;
   if ((a_cyl && (b_cyl || b.type == SurfaceType::Plane)) || (b_cyl && a.type == SurfaceType::Plane)) {
     const Surface& cyl = a_cyl ? a : b;
     const Surface& other = a_cyl ? b : a;
