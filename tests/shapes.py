@@ -151,6 +151,18 @@ def slotted_head(dome=True):
     return head.cut(Part.makeBox(30, 3, 20, V(-15, -1.5, 2))).removeSplitter()
 
 
+def bent_rod():
+    """A rod of r 5 bent through 90° about a radius of 15 between two straight runs of 40: cylinder,
+    torus, cylinder, tangent where they meet, and two flat ends."""
+    FreeCAD, Part, _ = freecad()
+    V = FreeCAD.Vector
+    first = Part.makeCylinder(5, 40, V(-40, 0, 0), V(1, 0, 0))
+    bend = Part.makeTorus(15, 5, V(0, 15, 0), V(0, 0, 1), -180, 180, 90)
+    bend.rotate(V(0, 15, 0), V(0, 0, 1), -90)
+    second = Part.makeCylinder(5, 40, V(15, 15, 0), V(0, 1, 0))
+    return first.fuse(bend).fuse(second).removeSplitter()
+
+
 def hexagon_nut(across_flats=20.0, height=8.0, bore=5.0):
     """A hexagon nut chamfered at 30° on both ends: six flats, two end faces, a bore and twelve pieces
     of the two chamfer cones (one at each corner of each end), all about the Z axis."""

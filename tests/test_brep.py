@@ -710,12 +710,11 @@ def test_scanned_round_along_a_circle_beside_its_plane_gives_the_solid():
 @needs_freecad
 @pytest.mark.parametrize("seed", [1, 3, 6])
 def test_noisy_scan_of_a_bent_rod_gives_its_solid(seed):
-    """A rod of r 5 bent about a radius of 15 between two straight runs (tests/test_features.py's
-    bent_rod), scanned with noise: each run touches the bend along the meridian circle through the
-    point where its axis touches the torus's centre circle. That circle is the edge (the general
-    intersection of the nearly tangent surfaces left all three seeds without a solid)."""
-    from test_features import bent_rod
-    part = bent_rod()
+    """A rod of r 5 bent about a radius of 15 between two straight runs (shapes.bent_rod), scanned
+    with noise: each run touches the bend along the meridian circle through the point where its
+    axis touches the torus's centre circle. That circle is the edge (the general intersection of
+    the nearly tangent surfaces left all three seeds without a solid)."""
+    part = shapes.bent_rod()
     V, F, _, diag = shapes.uniform_remesh(part)
     V = shapes.normal_noise(V, F, diag, seed)
     solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))

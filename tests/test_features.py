@@ -1139,18 +1139,6 @@ def test_cylinder_that_a_sculpted_undulation_tilts_into_a_cone_is_a_cylinder():
     assert sum(e["status"] == "correct" for e in score["per_face"]) == score["faces"]
 
 
-def bent_rod():
-    """A rod of r 5 bent through 90° about a radius of 15 between two straight runs of 40: cylinder,
-    torus, cylinder, tangent where they meet, and two flat ends."""
-    FreeCAD, Part, _ = shapes.freecad()
-    V = FreeCAD.Vector
-    first = Part.makeCylinder(5, 40, V(-40, 0, 0), V(1, 0, 0))
-    bend = Part.makeTorus(15, 5, V(0, 15, 0), V(0, 0, 1), -180, 180, 90)
-    bend.rotate(V(0, 15, 0), V(0, 0, 1), -90)
-    second = Part.makeCylinder(5, 40, V(15, 15, 0), V(0, 1, 0))
-    return first.fuse(bend).fuse(second).removeSplitter()
-
-
 @needs_freecad
 @pytest.mark.parametrize("seed", [1, 2])
 def test_bend_of_a_noisy_scanned_rod_is_a_torus_tangent_to_both_runs(seed):
@@ -1158,7 +1146,7 @@ def test_bend_of_a_noisy_scanned_rod_is_a_torus_tangent_to_both_runs(seed):
     bend and runs in one patch, and the cylinders grown in it each reach into the bend by as much as
     the noise hides. The torus touches them where a meridian plane of it crosses their axes: that
     tangency moves the border there (before: the bend's torus held 78-81 % of it)."""
-    solid = bent_rod()
+    solid = shapes.bent_rod()
     V, F, gt, diag = shapes.uniform_remesh(solid)
     V = shapes.normal_noise(V, F, diag, seed)
     layer = idealize.idealize(idealize.Mesh(V, F))

@@ -932,8 +932,8 @@ double bend(const Surface& surface, const FitData& data) {
 // that follows moves rim faces to the surfaces that explain them. A growing region's refit that no
 // longer fits within `fits_below` (and has drifted by more than the noise from its disc's fit) ends
 // its growth at the last region that did. A region that grew on as a torus (a sector of a tube's
-// bend, below) is entered in `generalized` (new id -> its torus), and the patch is split once more
-// with the tori grown first.
+// bend, below) makes the patch split once more with the tori grown first; the regions that stand as
+// tori are entered in `generalized` (new id -> its torus).
 int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
                         double normal_noise, double fits_below, int min_region_faces,
                         const std::function<Feature(const PatchPoints&)>& identify_points, const FitOptions& fit_options,
@@ -989,6 +989,7 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
   auto fits = [&](const Feature& f) { return f.type != SurfaceType::Freeform && f.rms <= fits_below; };
   long long visited = 0;
   struct Grown {
+    int id;
     std::vector<int> faces;
     Feature feature;
   };
@@ -1078,30 +1079,25 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
     for (int f : region) in_region[f] = 0;
     if (static_cast<int>(region.size()) < min_region_faces) return;
     for (int f : region) labels[f] = next_id;
-    if (feature.type != disc_type) {
-      generalized[next_id] = feature.surface;
-      tori.push_back({region, feature});
-    }
+    if (feature.type != disc_type) tori.push_back({next_id, region, feature});
     ++next_id;
   };
   // A torus found late grows over what the cylinders grown before it left: once one did, the
   // patch is split again with the tori first.
   std::vector<int> first_labels;  // of the faces, after the first pass
-  std::map<int, Surface> first_generalized;
+  std::vector<Grown> first_tori;
   int first_next = next_id;
   for (int pass = 0; pass < 2; ++pass) {
-    const std::vector<Grown> first_tori = std::move(tori);
-    tori.clear();
     if (pass == 1) {
-      if (first_tori.empty()) break;
+      if (tori.empty()) break;
       first_next = next_id;
-      first_generalized = generalized;
+      first_tori = std::move(tori);
+      tori.clear();
       for (int f : faces) {
         first_labels.push_back(labels[f]);
         labels[f] = patch;
       }
       std::fill(tried.begin(), tried.end(), 0);
-      for (int id = first_id; id < next_id; ++id) generalized.erase(id);
       next_id = first_id;
       for (const Grown& torus : first_tori) grow(torus.faces, torus.feature, SurfaceType::Cylinder);
     }
@@ -1140,11 +1136,11 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
     auto left = [&] { return std::count_if(faces.begin(), faces.end(), [&](int f) { return labels[f] == patch; }); };
     if (next_id > first_next || left() > std::count(first_labels.begin(), first_labels.end(), patch)) {
       for (size_t i = 0; i < faces.size(); ++i) labels[faces[i]] = first_labels[i];
-      for (int id = first_id; id < next_id; ++id) generalized.erase(id);
-      generalized.insert(first_generalized.begin(), first_generalized.end());
+      tori = std::move(first_tori);
       next_id = first_next;
     }
   }
+  for (const Grown& torus : tori) generalized[torus.id] = torus.feature.surface;
   if (next_id == first_id) return next_id;  // nothing split off: the patch stays whole
   std::vector<char> state(mesh.num_faces(), kOutside);
   for (int f : faces) state[f] = labels[f] == patch ? kUnvisited : kKept;
