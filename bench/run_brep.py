@@ -124,7 +124,8 @@ def bench_mesh(m, gt: Dict, idealize, workdir: Path, builtin: bool) -> Dict:
                identify_seconds=run["identify_seconds"], brep_seconds=run["brep_seconds"],
                step_seconds=run["step_seconds"], total_seconds=run["total_seconds"],
                step_bytes=step_path.stat().st_size if step_path.exists() else None,
-               max_deviation=solid.max_deviation / m.diag)
+               max_deviation=solid.max_deviation / m.diag,
+               max_tolerance=solid.max_tolerance / run["layer"].distance_tolerance)
     row["volume_error"] = abs(solid.volume - gt["volume"]) / gt["volume"] if solid.solid else None
     if solid.faces:
         ours = solid.triangulate(SAMPLE_DEFLECTION * m.diag)
@@ -154,6 +155,7 @@ def summarize(rows: List[Dict]) -> Dict:
             "meshes": len(vr), "solid": len(solid), "types_equal": len(good),
             "visible_types_equal": sum(r["visible_types_equal"] for r in solid),
             "faces_equal": sum(r["faces"] == r["gt_faces"] for r in solid),
+            "tight": sum(r["max_tolerance"] <= 1.0 for r in solid),
             "volume_error_median": _median([r["volume_error"] for r in solid]),
             "volume_error_max_good": max((r["volume_error"] for r in good), default=None),
             "volume_error_within_good": {
@@ -225,6 +227,8 @@ def markdown(results: Dict) -> str:
         "(those segmentation scores)",
         lambda x: f"{x['visible_types_equal']}/{x['meshes']}")
     row("... with its face count", lambda x: f"{x['faces_equal']}/{x['meshes']}")
+    row("... whose widest gap between faces (vertex or edge tolerance) is within the distance tolerance",
+        lambda x: f"{x['tight']}/{x['meshes']}")
     row("volume error, median over solids", lambda x: _pct(x["volume_error_median"]))
     row("volume error, max over type-correct solids", lambda x: _pct(x["volume_error_max_good"]))
     row("type-correct solids within 0.05 % / 0.5 % volume",

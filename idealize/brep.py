@@ -16,6 +16,8 @@ class Solid:
     faces, volume (0 unless solid), surface_types: face count per type. problems: list of
     (feature id or -1, message) for what failed. face_features: the feature of each face.
     max_deviation: largest distance from the input mesh vertices to the shape's faces.
+    max_tolerance: largest vertex or edge tolerance, the widest gap between the faces' boundaries
+    that the shape bridges (beyond the layer's distance tolerance, viewers may leave faces out).
     """
 
     def __init__(self, brep, layer, max_deviation, deflection, timings):
@@ -26,6 +28,7 @@ class Solid:
         self.solid = brep.solid
         self.faces = brep.faces
         self.volume = brep.volume
+        self.max_tolerance = brep.max_tolerance
         self.surface_types = dict(brep.surface_types)
         self.problems = list(brep.problems)
         self.face_features = list(brep.face_features)
@@ -67,6 +70,7 @@ class Solid:
             "volume": float(self.volume),
             "surface_types": {k: int(v) for k, v in sorted(self.surface_types.items())},
             "max_deviation": float(self.max_deviation),
+            "max_tolerance": float(self.max_tolerance),
             "problems": [{"feature": int(f), "message": m} for f, m in self.problems],
         }
 

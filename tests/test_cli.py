@@ -42,7 +42,7 @@ def test_convert_writes_report_with_public_keys(tmp_path, sphere_stl):
     assert report["timings"]["total"] > 0 and "segment" in report["timings"]
     # The fitted solid: one sphere face, its volume, and the STEP file holding it.
     brep = report["brep"]
-    assert {"valid", "closed", "solid", "faces", "volume", "surface_types", "max_deviation"} <= set(brep)
+    assert {"valid", "closed", "solid", "faces", "volume", "surface_types", "max_deviation", "max_tolerance"} <= set(brep)
     assert brep["solid"] and brep["valid"] and brep["closed"] and brep["faces"] == 1
     assert brep["surface_types"] == {"sphere": 1}
     assert brep["volume"] == pytest.approx(4 / 3 * np.pi * 1000, rel=2e-3)  # icosphere radius 10

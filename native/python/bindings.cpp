@@ -335,6 +335,7 @@ PYBIND11_MODULE(_native, m) {
       .def_readonly("solid", &BrepResult::solid)
       .def_readonly("faces", &BrepResult::faces)
       .def_readonly("volume", &BrepResult::volume)
+      .def_readonly("max_tolerance", &BrepResult::max_tolerance)
       .def_readonly("surface_types", &BrepResult::surface_types)
       .def_readonly("face_features", &BrepResult::face_features)
       .def_readonly("timings", &BrepResult::timings)

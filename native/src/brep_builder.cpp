@@ -199,9 +199,10 @@ double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x
 // Intersection points; primitives that touch within `tol` (missing each other or crossing with a
 // sagitta below it) meet in one point of contact: nearly tangent surfaces that idealization did not
 // make tangent (a fillet whose patch took some of the cone beside it) get the circle where they
-// touch, not one of two close crossings that the mesh's boundary does not follow.
-std::vector<Vec2> intersect(const Primitive2& a, const Primitive2& b, double tol) {
-  if (a.circle && !b.circle) return intersect(b, a, tol);
+// touch, not one of two close crossings that the mesh's boundary does not follow. With
+// `crossings_too`, crossings within the touching zone come too, for corners to choose from.
+std::vector<Vec2> intersect(const Primitive2& a, const Primitive2& b, double tol, bool crossings_too) {
+  if (a.circle && !b.circle) return intersect(b, a, tol, crossings_too);
   if (!a.circle && !b.circle) {
     const double det = cross2(a.d, b.d);
     if (std::abs(det) < 1e-12) return {};
@@ -212,8 +213,9 @@ std::vector<Vec2> intersect(const Primitive2& a, const Primitive2& b, double tol
     const Vec2 foot = a.p + (b.p - a.p).dot(a.d) * a.d;
     const double dist = (b.p - foot).norm();
     if (dist > b.r + tol) return {};
-    if (dist >= b.r - tol) return {foot};
+    if (dist >= b.r - tol && (!crossings_too || dist >= b.r)) return {foot};
     const double h = std::sqrt(b.r * b.r - dist * dist);
+    if (dist >= b.r - tol) return {foot + h * a.d, foot - h * a.d, foot};
     return {foot + h * a.d, foot - h * a.d};
   }
   const Vec2 between = b.p - a.p;
@@ -223,9 +225,10 @@ std::vector<Vec2> intersect(const Primitive2& a, const Primitive2& b, double tol
   const double along = (a.r * a.r - b.r * b.r + d * d) / (2 * d);
   const double h2 = a.r * a.r - along * along;
   const bool touching = std::abs(d - (a.r + b.r)) <= tol || std::abs(d - std::abs(a.r - b.r)) <= tol;
-  if (touching || h2 <= 1e-18 * std::max(1.0, a.r * a.r)) return {a.p + along * u};
+  if ((touching && !crossings_too) || h2 <= 1e-18 * std::max(1.0, a.r * a.r)) return {a.p + along * u};
   const double h = std::sqrt(h2);
   const Vec2 n(-u.y(), u.x());
+  if (touching) return {a.p + along * u + h * n, a.p + along * u - h * n, a.p + along * u};
   return {a.p + along * u + h * n, a.p + along * u - h * n};
 }
 
@@ -299,13 +302,28 @@ Vec2 nearest(const std::vector<Vec2>& candidates, const Vec2& reference) {
   });
 }
 
+// The branch of an edge among the intersections of two primitives in a 2D map (`hits` with the
+// crossings in touching zones, `contacts` without; both non-empty): the one through the corners
+// at its `ends` where one is within `tol` of them, otherwise the one nearest the chain's points.
+template <class Map>
+Vec2 edge_branch(const std::vector<Vec2>& hits, const std::vector<Vec2>& contacts, const std::vector<Vec3>& points,
+                 const std::vector<Vec3>& ends, Map map, double tol) {
+  if (!ends.empty()) {
+    const Vec2 corners = median_2d(ends, map), hit = nearest(hits, corners);
+    if ((hit - corners).norm() <= tol) return hit;
+  }
+  return nearest(contacts, median_2d(points, map));
+}
+
 // sin(5 degrees): directions this close count as parallel when an exact closed form is not found
 // (the feature graph's parallel tolerance).
 constexpr double kNearlyParallel = 0.0872;
 constexpr int kToleranceSamples = 64;  // points of a fitted edge measured against its two surfaces
 
+// The intersection curve of `a` and `b` in closed form, or null; `ends`: the corner points of an
+// open chain (none for a closed one), which choose the branch (edge_branch).
 Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const std::vector<Vec3>& points,
-                                     double angle_eps, double tol) {
+                                     const std::vector<Vec3>& ends, double angle_eps, double tol) {
   if (a.type == SurfaceType::Plane && b.type == SurfaceType::Plane) {
     const Vec3 dir = a.axis.cross(b.axis);
     if (dir.norm() < angle_eps) return nullptr;
@@ -327,10 +345,14 @@ Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const s
         const double h = (p - o).dot(axis);
         return Vec2((p - o - h * axis).norm(), h);
       };
-      std::vector<Vec2> hits = intersect(*ma, *mb, tol);
-      hits.erase(std::remove_if(hits.begin(), hits.end(), [&](const Vec2& q) { return q.x() <= tol; }), hits.end());
-      if (hits.empty()) return nullptr;
-      const Vec2 hit = nearest(hits, median_2d(points, rho_h));
+      const auto off_axis = [&](bool crossings_too) {
+        std::vector<Vec2> hits = intersect(*ma, *mb, tol, crossings_too);
+        hits.erase(std::remove_if(hits.begin(), hits.end(), [&](const Vec2& q) { return q.x() <= tol; }), hits.end());
+        return hits;
+      };
+      const std::vector<Vec2> contacts = off_axis(false);
+      if (contacts.empty()) return nullptr;
+      const Vec2 hit = edge_branch(off_axis(true), contacts, points, ends, rho_h, tol);
       Vec3 x = Vec3::Zero();
       for (const Vec3& p : points) x += p - o - (p - o).dot(axis) * axis;
       return new Geom_Circle(gp_Ax2(to_pnt(o + hit.y() * axis), to_dir(axis), to_dir(seam_direction(axis, x))), hit.x());
@@ -382,9 +404,10 @@ Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const s
     } else {
       second = circle2(section(other.point), other.radius);
     }
-    const std::vector<Vec2> hits = intersect(circle2(Vec2::Zero(), cyl.radius), second, tol);
-    if (hits.empty()) return nullptr;
-    const Vec2 hit = nearest(hits, median_2d(points, section));
+    const Primitive2 round = circle2(Vec2::Zero(), cyl.radius);
+    const std::vector<Vec2> contacts = intersect(round, second, tol, false);
+    if (contacts.empty()) return nullptr;
+    const Vec2 hit = edge_branch(intersect(round, second, tol, true), contacts, points, ends, section, tol);
     return new Geom_Line(to_pnt(o2 + hit.x() * e1 + hit.y() * e2), to_dir(dir));
   }
   return nullptr;
@@ -852,11 +875,39 @@ LocalSurface BrepBuilder::local_surface(int feature) const {
   return [s](const Vec3&) { return *s; };
 }
 
+// The plane that stands in for one of two surfaces touching along `contact` at a corner: the
+// plane of a circle of contact, or the plane through a line of contact square to `a` there (their
+// common tangent plane). With the other surface it fixes the curve the corner lies on, which the
+// two surfaces alone leave free across the zone where they are close.
+Surface contact_plane(const Handle(Geom_Curve)& contact, const Surface& a) {
+  Surface plane;
+  plane.type = SurfaceType::Plane;
+  if (const Handle(Geom_Circle) circle = Handle(Geom_Circle)::DownCast(contact)) {
+    plane.point = to_vec(circle->Location());
+    const gp_Dir n = circle->Axis().Direction();
+    plane.axis = Vec3(n.X(), n.Y(), n.Z());
+  } else {
+    const Handle(Geom_Line) line = Handle(Geom_Line)::DownCast(contact);
+    plane.point = to_vec(line->Position().Location());
+    const gp_Dir d = line->Position().Direction();
+    plane.axis = Vec3(d.X(), d.Y(), d.Z()).cross(surface_normal(a, plane.point));
+  }
+  plane.axis.normalize();
+  return plane;
+}
+
 void BrepBuilder::make_vertices(const MeshTopology& topology) {
   BRep_Builder builder;
+  std::map<int, std::vector<int>> chains_at;  // corner -> the chains that end there
+  for (size_t c = 0; c < topo_.chains.size(); ++c) {
+    const BoundaryChain& chain = topo_.chains[c];
+    if (chain.closed || chain.right < 0) continue;
+    chains_at[chain.vertices.front()].push_back(static_cast<int>(c));
+    if (chain.vertices.back() != chain.vertices.front()) chains_at[chain.vertices.back()].push_back(static_cast<int>(c));
+  }
   for (int v : topo_.corners) {
     std::vector<const Surface*> around;
-    std::vector<int> freeform;
+    std::vector<int> around_features, freeform;
     std::set<int> seen;
     for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f) {
       const int feature = topo_.region_feature[topo_.face_region[*f]];
@@ -865,11 +916,38 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
         freeform.push_back(feature);
       } else if (surfaces_[feature].type != SurfaceType::Freeform) {
         around.push_back(&surfaces_[feature]);
+        around_features.push_back(feature);
       }
     }
     const Vec3 x0 = mesh_.V.row(v).transpose();
+    std::vector<Surface> constraints = corner_constraints(around, tol_);
+    // Two surfaces that touch along the chain between them (a fillet and the plane it runs into)
+    // meet the corner on their curve of contact: a contact plane stands in for one of them.
+    std::vector<char> replaced(constraints.size(), 0);
+    for (size_t i = 0; i < constraints.size(); ++i) replaced[i] = constraints[i].type != around[i]->type;
+    for (int c : chains_at[v]) {
+      const BoundaryChain& chain = topo_.chains[c];
+      const auto index = [&](int region) {
+        return std::find(around_features.begin(), around_features.end(), topo_.region_feature[region]) - around_features.begin();
+      };
+      const size_t ia = static_cast<size_t>(index(chain.left)), ib = static_cast<size_t>(index(chain.right));
+      if (ia >= around.size() || ib >= around.size() || ia == ib || replaced[ia] || replaced[ib]) continue;
+      const Surface &a = *around[ia], &b = *around[ib];
+      std::vector<Vec3> raw;
+      for (int u : chain.vertices) raw.push_back(mesh_.V.row(u).transpose());
+      const LocalSurface local_a = [&a](const Vec3&) { return a; }, local_b = [&b](const Vec3&) { return b; };
+      const std::vector<Vec3> points = project_on_both(raw, local_a, &local_b);
+      Handle(Geom_Curve) contact = closed_form_curve(a, b, points, {}, angle_eps_, tol_);
+      if (contact.IsNull()) contact = closed_form_curve(a, b, points, {}, kNearlyParallel, 5 * tol_);  // as make_edges
+      if (contact.IsNull() || !(contact->IsKind(STANDARD_TYPE(Geom_Circle)) || contact->IsKind(STANDARD_TYPE(Geom_Line))) ||
+          !tangent_along(contact, a, b, points))
+        continue;
+      const size_t round = a.type == SurfaceType::Plane ? ib : ia;
+      constraints[round] = contact_plane(contact, round == ia ? b : a);
+      replaced[round] = 1;
+    }
     std::vector<LocalSurface> meeting;
-    for (const Surface& c : corner_constraints(around, tol_)) meeting.push_back([c](const Vec3&) { return c; });
+    for (const Surface& c : constraints) meeting.push_back([c](const Vec3&) { return c; });
     for (int feature : freeform) meeting.push_back(local_surface(feature));
     corner_points_[v] = meeting.empty() ? x0 : corner_point(meeting, x0, tol_);
   }
@@ -948,8 +1026,13 @@ void BrepBuilder::make_edges(BrepResult& result) {
       // a little off one surface is a sound edge (its tolerance says by how much), the general
       // intersection of nearly tangent surfaces is not.
       Handle(Geom_Curve) curve;
+      // The corners that an open chain's edge joins choose its branch in the exact configuration;
+      // in the near one, whose touching zone is five times as wide, they lie off every branch.
+      std::vector<Vec3> ends;
+      if (!chain.closed) ends = {corner_points_.at(chain.vertices.front()), corner_points_.at(chain.vertices.back())};
       for (const auto& [angle_eps, gap] : {std::pair{angle_eps_, tol_}, std::pair{kNearlyParallel, 5 * tol_}}) {
-        if (b && analytic && curve.IsNull()) curve = closed_form_curve(a, *b, points, angle_eps, gap);
+        if (b && analytic && curve.IsNull())
+          curve = closed_form_curve(a, *b, points, gap == tol_ ? ends : std::vector<Vec3>(), angle_eps, gap);
         if (curve && max_distance_to_curve(curve, points) > (tangent_along(curve, a, *b, points) ? 0.05 * diagonal_ : 5 * tol_))
           curve.Nullify();
       }
@@ -1008,6 +1091,9 @@ void BrepBuilder::make_edges(BrepResult& result) {
             p0 = to_vec(on_curve);
           }
         }
+        // A closed curve that is not periodic (an intersection loop of two cylinders) runs from
+        // its first point round to it: the vertex goes there, not where the chain starts.
+        if (!curve->IsPeriodic()) p0 = to_vec(curve->Value(curve->FirstParameter()));
         builder.MakeVertex(v0, to_pnt(p0), Precision::Confusion());
         v1 = v0;
         p1 = p0;
@@ -1584,6 +1670,10 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     }
     result.face_features.push_back(feature);
   }
+  for (TopExp_Explorer e(shape, TopAbs_VERTEX); e.More(); e.Next())
+    result.max_tolerance = std::max(result.max_tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(e.Current())));
+  for (TopExp_Explorer e(shape, TopAbs_EDGE); e.More(); e.Next())
+    result.max_tolerance = std::max(result.max_tolerance, BRep_Tool::Tolerance(TopoDS::Edge(e.Current())));
   checking.step(0.6);
   if (result.solid) {
     GProp_GProps properties;

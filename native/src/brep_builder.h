@@ -57,6 +57,7 @@ struct BrepResult {
   bool solid = false;      // shape is a valid closed solid
   int faces = 0;
   double volume = 0.0;     // of the solid (0 otherwise)
+  double max_tolerance = 0.0;  // largest vertex or edge tolerance: the widest gap the shape bridges
   std::map<std::string, int> surface_types;  // face count per surface type name
   std::vector<BrepProblem> problems;
   std::vector<int> face_features;            // per face of `shape` (TopExp order): its feature, -1 unknown
