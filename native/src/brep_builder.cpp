@@ -68,6 +68,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <tuple>
 #include <sstream>
 
 namespace idealize {
@@ -213,10 +214,11 @@ std::vector<Vec2> intersect(const Primitive2& a, const Primitive2& b, double tol
     const Vec2 foot = a.p + (b.p - a.p).dot(a.d) * a.d;
     const double dist = (b.p - foot).norm();
     if (dist > b.r + tol) return {};
-    if (dist >= b.r - tol && (!crossings_too || dist >= b.r)) return {foot};
+    if (dist >= b.r) return {foot};  // missing by less than tol
     const double h = std::sqrt(b.r * b.r - dist * dist);
-    if (dist >= b.r - tol) return {foot + h * a.d, foot - h * a.d, foot};
-    return {foot + h * a.d, foot - h * a.d};
+    if (dist < b.r - tol) return {foot + h * a.d, foot - h * a.d};
+    if (!crossings_too) return {foot};
+    return {foot + h * a.d, foot - h * a.d, foot};
   }
   const Vec2 between = b.p - a.p;
   const double d = between.norm();
@@ -225,11 +227,12 @@ std::vector<Vec2> intersect(const Primitive2& a, const Primitive2& b, double tol
   const double along = (a.r * a.r - b.r * b.r + d * d) / (2 * d);
   const double h2 = a.r * a.r - along * along;
   const bool touching = std::abs(d - (a.r + b.r)) <= tol || std::abs(d - std::abs(a.r - b.r)) <= tol;
-  if ((touching && !crossings_too) || h2 <= 1e-18 * std::max(1.0, a.r * a.r)) return {a.p + along * u};
+  const Vec2 contact = a.p + along * u;
+  if ((touching && !crossings_too) || h2 <= 1e-18 * std::max(1.0, a.r * a.r)) return {contact};
   const double h = std::sqrt(h2);
   const Vec2 n(-u.y(), u.x());
-  if (touching) return {a.p + along * u + h * n, a.p + along * u - h * n, a.p + along * u};
-  return {a.p + along * u + h * n, a.p + along * u - h * n};
+  if (!touching) return {contact + h * n, contact - h * n};
+  return {contact + h * n, contact - h * n, contact};
 }
 
 // The meridian of `s` about the axis (o, a) when `s` is a surface of revolution about it.
@@ -905,6 +908,7 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
     chains_at[chain.vertices.front()].push_back(static_cast<int>(c));
     if (chain.vertices.back() != chain.vertices.front()) chains_at[chain.vertices.back()].push_back(static_cast<int>(c));
   }
+  std::map<int, Handle(Geom_Curve)> contact_of;  // chain -> the curve its two surfaces touch along, or null
   for (int v : topo_.corners) {
     std::vector<const Surface*> around;
     std::vector<int> around_features, freeform;
@@ -933,15 +937,21 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
       const size_t ia = static_cast<size_t>(index(chain.left)), ib = static_cast<size_t>(index(chain.right));
       if (ia >= around.size() || ib >= around.size() || ia == ib || replaced[ia] || replaced[ib]) continue;
       const Surface &a = *around[ia], &b = *around[ib];
-      std::vector<Vec3> raw;
-      for (int u : chain.vertices) raw.push_back(mesh_.V.row(u).transpose());
-      const LocalSurface local_a = [&a](const Vec3&) { return a; }, local_b = [&b](const Vec3&) { return b; };
-      const std::vector<Vec3> points = project_on_both(raw, local_a, &local_b);
-      Handle(Geom_Curve) contact = closed_form_curve(a, b, points, {}, angle_eps_, tol_);
-      if (contact.IsNull()) contact = closed_form_curve(a, b, points, {}, kNearlyParallel, 5 * tol_);  // as make_edges
-      if (contact.IsNull() || !(contact->IsKind(STANDARD_TYPE(Geom_Circle)) || contact->IsKind(STANDARD_TYPE(Geom_Line))) ||
-          !tangent_along(contact, a, b, points))
-        continue;
+      // Once per chain: both its corners ask.
+      const auto [known, first] = contact_of.try_emplace(c);
+      Handle(Geom_Curve)& contact = known->second;
+      if (first) {
+        std::vector<Vec3> raw;
+        for (int u : chain.vertices) raw.push_back(mesh_.V.row(u).transpose());
+        const LocalSurface local_a = [&a](const Vec3&) { return a; }, local_b = [&b](const Vec3&) { return b; };
+        const std::vector<Vec3> points = project_on_both(raw, local_a, &local_b);
+        contact = closed_form_curve(a, b, points, {}, angle_eps_, tol_);
+        if (contact.IsNull()) contact = closed_form_curve(a, b, points, {}, kNearlyParallel, 5 * tol_);  // as make_edges
+        if (contact && (!(contact->IsKind(STANDARD_TYPE(Geom_Circle)) || contact->IsKind(STANDARD_TYPE(Geom_Line))) ||
+                        !tangent_along(contact, a, b, points)))
+          contact.Nullify();
+      }
+      if (contact.IsNull()) continue;
       const size_t round = a.type == SurfaceType::Plane ? ib : ia;
       constraints[round] = contact_plane(contact, round == ia ? b : a);
       replaced[round] = 1;
@@ -1030,9 +1040,10 @@ void BrepBuilder::make_edges(BrepResult& result) {
       // in the near one, whose touching zone is five times as wide, they lie off every branch.
       std::vector<Vec3> ends;
       if (!chain.closed) ends = {corner_points_.at(chain.vertices.front()), corner_points_.at(chain.vertices.back())};
-      for (const auto& [angle_eps, gap] : {std::pair{angle_eps_, tol_}, std::pair{kNearlyParallel, 5 * tol_}}) {
+      for (const auto& [angle_eps, gap, exact] :
+           {std::tuple{angle_eps_, tol_, true}, std::tuple{kNearlyParallel, 5 * tol_, false}}) {
         if (b && analytic && curve.IsNull())
-          curve = closed_form_curve(a, *b, points, gap == tol_ ? ends : std::vector<Vec3>(), angle_eps, gap);
+          curve = closed_form_curve(a, *b, points, exact ? ends : std::vector<Vec3>(), angle_eps, gap);
         if (curve && max_distance_to_curve(curve, points) > (tangent_along(curve, a, *b, points) ? 0.05 * diagonal_ : 5 * tol_))
           curve.Nullify();
       }
