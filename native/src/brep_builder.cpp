@@ -3,6 +3,7 @@
 #include "brep_topology.h"
 #include "bspline_fitting.h"
 #include "occt_signals.h"
+#include "parallel.h"
 
 #include <BRepAdaptor_Surface.hxx>
 #include <BOPAlgo_ArgumentAnalyzer.hxx>
@@ -1449,23 +1450,30 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   // An edge's tolerance must cover its pcurves too: a circle on a sphere that is no parallel (a
   // ball corner's rim) gets an approximated pcurve that strays from the circle by more than the
   // exact circle's tolerance, which BRepCheck accepts and the boolean operations' check does not.
-  BRep_Builder tolerances;
-  for (const TopoDS_Face& face : faces_) {
-    for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) {
+  // The checks only read the faces (on two threads); the tolerances are raised in face order.
+  const int face_count = static_cast<int>(faces_.size());
+  std::vector<std::vector<std::pair<TopoDS_Edge, double>>> pcurve_gaps(face_count);
+  on_two_threads_as_free(face_count, [&](int i) {
+    for (TopExp_Explorer e(faces_[i], TopAbs_EDGE); e.More(); e.Next()) {
       const TopoDS_Edge& edge = TopoDS::Edge(e.Current());
       try {
         OCC_CATCH_SIGNALS
-        BRepLib_CheckCurveOnSurface check(edge, face);
+        BRepLib_CheckCurveOnSurface check(edge, faces_[i]);
         check.Perform();
         // (A distance beyond the part's size is the check failing: no tolerance to take from it.)
-        if (!check.IsDone() || !(check.MaxDistance() > BRep_Tool::Tolerance(edge)) || !(check.MaxDistance() <= diagonal_))
-          continue;
-        const double tolerance = 1.01 * check.MaxDistance();
-        tolerances.UpdateEdge(edge, tolerance);
-        for (TopExp_Explorer v(edge, TopAbs_VERTEX); v.More(); v.Next())
-          tolerances.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
+        if (check.IsDone() && check.MaxDistance() <= diagonal_) pcurve_gaps[i].emplace_back(edge, check.MaxDistance());
       } catch (const Standard_Failure&) {
       }
+    }
+  });
+  BRep_Builder tolerances;
+  for (const auto& gaps : pcurve_gaps) {
+    for (const auto& [edge, gap] : gaps) {
+      if (!(gap > BRep_Tool::Tolerance(edge))) continue;
+      const double tolerance = 1.01 * gap;
+      tolerances.UpdateEdge(edge, tolerance);
+      for (TopExp_Explorer v(edge, TopAbs_VERTEX); v.More(); v.Next())
+        tolerances.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
     }
   }
   for (const TopoDS_Face& face : faces_) {
@@ -1475,18 +1483,27 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     } catch (const Standard_Failure&) {
     }
   }
-  BRepBuilderAPI_Sewing sewing(tol_);
-  const ProgressSpan progress = progress_.sub("sewing", 0.83, 0.9);
-  for (size_t i = 0; i < faces_.size(); ++i) {
-    progress.sub(0.0, 0.5).step(static_cast<double>(i) / faces_.size());
+  // Healing only where needed: invalid faces, and faces bounded by nothing (a whole sphere or torus
+  // gets its natural bounds). Each face is judged as built (on two threads: a few faces of a scan
+  // that does not close take most of the time), before healing touches its neighbours' edges.
+  std::vector<char> sound(face_count, 0);
+  on_two_threads_as_free(face_count, [&](int i) {
     try {
       OCC_CATCH_SIGNALS
-      // Healing only where needed: invalid faces, and faces bounded by nothing (a whole sphere
-      // or torus gets its natural bounds).
-      if (TopExp_Explorer(faces_[i], TopAbs_WIRE).More() && BRepCheck_Analyzer(faces_[i]).IsValid()) {
-        sewing.Add(faces_[i]);
-        continue;
-      }
+      sound[i] = TopExp_Explorer(faces_[i], TopAbs_WIRE).More() && BRepCheck_Analyzer(faces_[i]).IsValid();
+    } catch (const Standard_Failure&) {
+    }
+  });
+  BRepBuilderAPI_Sewing sewing(tol_);
+  const ProgressSpan progress = progress_.sub("sewing", 0.83, 0.9);
+  for (int i = 0; i < face_count; ++i) {
+    progress.sub(0.0, 0.5).step(static_cast<double>(i) / face_count);
+    if (sound[i]) {
+      sewing.Add(faces_[i]);
+      continue;
+    }
+    try {
+      OCC_CATCH_SIGNALS
       ShapeFix_Face fix(faces_[i]);
       // Its periodic-degenerate check dereferences a null curve on some faces (OCCT 7.6); our
       // spheres and cones have their poles and apices away from the faces anyway.
@@ -1639,18 +1656,30 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   // invalid solid).
   result.solid = result.valid && result.closed && shape.ShapeType() == TopAbs_SOLID;
   if (!result.solid) {
-    // Only the faces that pass the boolean operations' checks are kept (shell_face_fault).
+    // Only the faces that pass the boolean operations' checks are kept (shell_face_fault, which
+    // only reads them: on two threads).
+    std::vector<TopoDS_Face> sewn_faces;
+    for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) sewn_faces.push_back(TopoDS::Face(e.Current()));
+    std::vector<std::string> faults(sewn_faces.size());
+    on_two_threads_as_free(static_cast<int>(sewn_faces.size()), [&](int i) {
+      try {
+        OCC_CATCH_SIGNALS
+        faults[i] = shell_face_fault(sewn_faces[i], diagonal_);
+      } catch (const Standard_Failure& failure) {
+        faults[i] = occt_message(failure, "its check failed");
+      }
+    });
     BRep_Builder builder;
     TopoDS_Compound kept_faces;
     builder.MakeCompound(kept_faces);
     bool dropped = false;
-    for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
-      const std::string reason = shell_face_fault(e.Current(), diagonal_);
+    for (size_t i = 0; i < sewn_faces.size(); ++i) {
+      const std::string& reason = faults[i];
       if (reason.empty()) {
-        builder.Add(kept_faces, e.Current());
+        builder.Add(kept_faces, sewn_faces[i]);
       } else {
         dropped = true;
-        const Handle(Geom_Surface) surface = BRep_Tool::Surface(TopoDS::Face(e.Current()));
+        const Handle(Geom_Surface) surface = BRep_Tool::Surface(sewn_faces[i]);
         const std::string message = "its face is not valid (" + reason + ")";
         bool found = false;
         for (int r = 0; r < regions; ++r) {
@@ -1660,7 +1689,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
           }
         }
         // Healing may have put the face on a copy of its surface: still never dropped silently.
-        if (!found) result.problems.push_back({-1, std::string("a ") + occt_surface_name(TopoDS::Face(e.Current())) + " face: " + message.substr(4)});
+        if (!found) result.problems.push_back({-1, std::string("a ") + occt_surface_name(sewn_faces[i]) + " face: " + message.substr(4)});
       }
     }
     if (dropped || !result.valid) {  // the sewn shell when it is valid and every face is kept

@@ -5,6 +5,7 @@
 
 #include "progress.h"
 
+#include <atomic>
 #include <future>
 #include <system_error>
 #include <vector>
@@ -34,6 +35,16 @@ void on_two_threads(const std::vector<int>& items, const Work& work, const Progr
       if (first == 0) progress.step(static_cast<double>(k) / items.size());
       work(items[k]);
     }
+  });
+}
+
+// Runs work(i) for each i in [0, count) on two threads, each taking the next item as soon as it is
+// free: for items of very uneven cost (a few of them take most of the time). `work` must not throw.
+template <class Work>
+void on_two_threads_as_free(int count, const Work& work) {
+  std::atomic<int> next{0};
+  on_two_threads([&](size_t) {
+    for (int i = next++; i < count; i = next++) work(i);
   });
 }
 
