@@ -15,6 +15,7 @@
 #include <BRepCheck_Result.hxx>
 #include <BRepGProp.hxx>
 #include <BRepLib_CheckCurveOnSurface.hxx>
+#include <BRepTools.hxx>
 #include <BRepTools_WireExplorer.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
@@ -25,9 +26,11 @@
 #include <GeomAPI_PointsToBSpline.hxx>
 #include <GeomAPI_ExtremaCurveCurve.hxx>
 #include <GeomAPI_ProjectPointOnCurve.hxx>
+#include <GeomAPI_ProjectPointOnSurf.hxx>
 #include <Geom_BSplineCurve.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_Circle.hxx>
+#include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_ConicalSurface.hxx>
 #include <Geom_CylindricalSurface.hxx>
 #include <Geom_Ellipse.hxx>
@@ -652,6 +655,8 @@ class BrepBuilder {
   bool is_cap(size_t region) const;  // a cone or sphere bounded by one closed chain
   std::optional<TopoDS_Face> pole_cap(size_t region);
   TopoDS_Shape assemble(BrepResult& result, const BrepOptions& options);
+  // The region whose surface `face` lies on, -1 none.
+  int region_of(const TopoDS_Face& face) const;
 
   const TriangleMesh& mesh_;
   const std::vector<Surface>& surfaces_;
@@ -1435,6 +1440,32 @@ bool has_free_edges(const TopoDS_Shape& shape) {
   return false;
 }
 
+// Faces map back to features by their surface: the region's own, or for a face that healing or
+// merging put on a copy (or a trimmed copy), the region's surface of that kind through points of
+// the face's.
+int BrepBuilder::region_of(const TopoDS_Face& face) const {
+  Handle(Geom_Surface) surface = BRep_Tool::Surface(face);
+  if (const Handle(Geom_RectangularTrimmedSurface) trimmed = Handle(Geom_RectangularTrimmedSurface)::DownCast(surface);
+      !trimmed.IsNull())
+    surface = trimmed->BasisSurface();  // merging bounds a periodic face's surface
+  for (size_t r = 0; r < region_surfaces_.size(); ++r)
+    if (region_surfaces_[r] == surface) return static_cast<int>(r);
+  double u0, u1, v0, v1;
+  BRepTools::UVBounds(face, u0, u1, v0, v1);
+  const std::array<gp_Pnt, 3> points = {surface->Value(u0 + 0.25 * (u1 - u0), v0 + 0.25 * (v1 - v0)),
+                                        surface->Value(u0 + 0.75 * (u1 - u0), v0 + 0.5 * (v1 - v0)),
+                                        surface->Value(u0 + 0.5 * (u1 - u0), v0 + 0.75 * (v1 - v0))};
+  for (size_t r = 0; r < region_surfaces_.size(); ++r) {
+    if (region_surfaces_[r].IsNull() || region_surfaces_[r]->DynamicType() != surface->DynamicType()) continue;
+    const bool on = std::all_of(points.begin(), points.end(), [&](const gp_Pnt& p) {
+      GeomAPI_ProjectPointOnSurf projection(p, region_surfaces_[r]);
+      return projection.NbPoints() > 0 && projection.LowerDistance() <= tol_;
+    });
+    if (on) return static_cast<int>(r);
+  }
+  return -1;
+}
+
 TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& options) {
   // Each face that needs it is healed on its own (pcurves shifted into one period, seams of
   // closed faces, degenerate edges at poles), then the faces are sewn: healing may replace an
@@ -1679,17 +1710,13 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
         builder.Add(kept_faces, sewn_faces[i]);
       } else {
         dropped = true;
-        const Handle(Geom_Surface) surface = BRep_Tool::Surface(sewn_faces[i]);
         const std::string message = "its face is not valid (" + reason + ")";
-        bool found = false;
-        for (int r = 0; r < regions; ++r) {
-          if (region_surfaces_[r] == surface) {
-            result.problems.push_back({topo_.region_feature[r], message});
-            found = true;
-          }
-        }
-        // Healing may have put the face on a copy of its surface: still never dropped silently.
-        if (!found) result.problems.push_back({-1, std::string("a ") + occt_surface_name(sewn_faces[i]) + " face: " + message.substr(4)});
+        const int region = region_of(sewn_faces[i]);
+        // Never dropped silently, also where no feature is known.
+        if (region >= 0)
+          result.problems.push_back({topo_.region_feature[region], message});
+        else
+          result.problems.push_back({-1, std::string("a ") + occt_surface_name(sewn_faces[i]) + " face: " + message.substr(4)});
       }
     }
     if (dropped || !result.valid) {  // the sewn shell when it is valid and every face is kept
@@ -1703,12 +1730,8 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     const TopoDS_Face& face = TopoDS::Face(e.Current());
     ++result.faces;
     ++result.surface_types[occt_surface_name(face)];
-    const Handle(Geom_Surface) surface = BRep_Tool::Surface(face);
-    int feature = -1;
-    for (int r = 0; r < regions && feature < 0; ++r) {
-      if (region_surfaces_[r] == surface) feature = topo_.region_feature[r];
-    }
-    result.face_features.push_back(feature);
+    const int region = region_of(face);
+    result.face_features.push_back(region < 0 ? -1 : topo_.region_feature[region]);
   }
   for (TopExp_Explorer e(shape, TopAbs_VERTEX); e.More(); e.Next())
     result.max_tolerance = std::max(result.max_tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(e.Current())));

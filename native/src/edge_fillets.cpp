@@ -645,17 +645,23 @@ std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topo
     }
     if (static_cast<int>(local.size()) <= 2 * parameter_count(SurfaceType::Cylinder)) continue;
     const std::vector<Vector2> sample = even_sample(local);
-    const int n = static_cast<int>(sample.size());
 
     const std::optional<Fillet> fillet = fit_fillet(w, sample, edge / 8.0, 0.5 * band * std::tan(0.5 * w.opening));
     if (!fillet) continue;
-    const double variance = fillet->rounded / std::max(n - 3, 1);
+    // The evidence is every vertex of the band (a long narrow fillet sags by little more than the
+    // noise, and the subsample that fixes its shape holds too few of its vertices): the sums of
+    // squares of the sharp and the fitted rounded wedge over all, with their offsets refitted.
+    const int n = static_cast<int>(local.size());
+    Vector2 sharp_offset = Vector2::Zero(), rounded_offset = fillet->offset;
+    const double sharp = fit_offsets(w, local, 0.0, sharp_offset);
+    const double rounded = fit_offsets(w, local, fillet->radius, rounded_offset);
+    const double variance = rounded / std::max(n - 3, 1);
     const double spread = std::max(features[a].spread, features[b].spread);
     // BIC for one more parameter, over the independent residuals; the band explained as the
     // features explain their patches; an arc longer than a sharp edge's (the features turn by pi
     // less the opening).
     const double effective = std::max(independent * n, 2.0);
-    if (!(independent * (fillet->sharp - fillet->rounded) > std::log(effective) * variance) ||
+    if (!(independent * (sharp - rounded) > std::log(effective) * variance) ||
         rounded_spread(w, *fillet, sample) > options.residual_ratio * spread ||
         fillet->radius * (M_PI - w.opening) < options.shortest_arc * edge)
       continue;

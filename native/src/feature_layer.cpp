@@ -1854,6 +1854,11 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         beside = adjacent_pairs(mesh, topology, layer.labels);
       }
     }
+    // The features that the edge stages refitted freely (without the faces they gave a fillet, a
+    // narrow band whose own axis tilts by a degree) take the part's axes again.
+    SharedAxisOptions determined = shared;
+    determined.only_determined = true;
+    fit_about_shared_axes(settled, determined, layer.features);
     // The tori that the edge stages found or left, now that their neighbours are settled.
     tori_between_planes_and_cylinders(settled, beside, shared, layer.features);
     planes_on_curved_surfaces(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), -1), shared,

@@ -323,9 +323,13 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
     const bool plane = feature.type == SurfaceType::Plane, sphere = feature.type == SurfaceType::Sphere;
     if (!plane && !sphere && feature.type != SurfaceType::Cylinder && feature.type != SurfaceType::Cone) continue;
     if (data.points.rows() < 2 * parameter_count(feature.type)) continue;
-    // One of the part's axes already: idealization aligns it.
-    if (!plane && !sphere && std::any_of(axes.begin(), axes.end(), [&](const Axis& a) { return same_axis(feature.surface, a, options); }))
+    // On another feature's axis already: idealization aligns it.
+    if (!plane && !sphere && std::any_of(axes.begin(), axes.end(), [&](const Axis& a) {
+          return a.source != static_cast<int>(f) && same_axis(feature.surface, a, options);
+        }))
       continue;
+    const bool determined = std::any_of(axes.begin(), axes.end(), [&](const Axis& a) { return a.source == static_cast<int>(f); });
+    if (options.only_determined && !determined) continue;
     // Candidates by RMS (cheap); the spreads decide for the best one.
     const double rms_limit = plane ? feature.rms : options.residual_ratio * feature.rms + options.distance_tolerance;
     SurfaceFit best;
@@ -335,6 +339,18 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
       if (fit.valid && fit.rms < rms_limit && (!best.valid || fit.rms < best.rms)) best = fit;
     }
     if (!best.valid) continue;
+    if (determined) {
+      // Its own axis is one more axis of the part only where the data need it: the BIC for the four
+      // parameters of an axis of its own (a narrow band of revolution tilts its fit by a degree
+      // within the noise).
+      const double n = static_cast<double>(data.points.rows());
+      if (best.surface.type != feature.type || !(feature.rms > 0.0) ||
+          n * std::log(best.rms * best.rms / (feature.rms * feature.rms)) > 4.0 * std::log(n))
+        continue;
+      feature.set_fit(best);
+      ++changed;
+      continue;
+    }
     measure_spreads(data, best);
     const bool normals_fit =
         best.normal_spread <= options.residual_ratio * feature.normal_spread + options.normal_floor;

@@ -25,13 +25,17 @@ struct SharedAxisOptions {
   // most residual_ratio times the other's plus normal_floor (radians).
   double residual_ratio = 1.5;
   double normal_floor = 2.0 * 3.14159265358979323846 / 180.0;
+  // Refit only the features whose axes are determined (a pass after the others were settled).
+  bool only_determined = false;
 };
 
 // Refits the planes, spheres, cylinders and cones of `features` (`points`: what the fits see of
 // each, by feature id) about the determined axes of the part's other features. A cylinder or cone
 // whose own axis is none of them, or a sphere (a narrow band of a cone fits one as well), takes the
 // coaxial cylinder or cone that fits as well as its own surface (the one of least spread). A plane takes one only where its points fit it better than the plane
-// (and its normals as well) and it turns across the patch by more than the angle tolerance.
+// (and its normals as well) and it turns across the patch by more than the angle tolerance. A
+// cylinder or cone whose own axis is determined but on no other feature's takes the other axis of
+// the same type where the BIC does not need the four parameters of an axis of its own.
 // Returns the number of features that changed.
 int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOptions& options,
                           std::vector<Feature>& features);
