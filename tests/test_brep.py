@@ -721,8 +721,9 @@ def test_faces_of_a_shell_that_does_not_close_pass_the_boolean_checks():
     edges that cross each other or leave the surface, or by a boundary running the wrong way round
     (on the scan of as_circular_blend_01, before it closed, a torus face of negative area): BRepCheck
     passed them, and OpenCASCADE's mesher never returned on such a torus face (the deviation check
-    hung). Such faces are left out and named. Faces are checked on two threads, each taking the next
-    when free: what is kept and named must not depend on which finishes first."""
+    hung). Such faces are left out and named. Edges are made and faces checked on two threads, each
+    taking the next when free: the edges, what is kept and what is named must not depend on which
+    finishes first."""
     m = shapes.benchmark_mesh("as_bb_boxblend_03.stp", "scan")
     layer = idealize.idealize(Mesh(m.V, m.F))
     solid = idealize.make_solid(layer)
@@ -730,6 +731,7 @@ def test_faces_of_a_shell_that_does_not_close_pass_the_boolean_checks():
     for _ in range(3):
         again = idealize.make_solid(layer)
         assert again.brep_string() == solid.brep_string() and again.problems == solid.problems
+        assert again._brep.edges == solid._brep.edges
     shape = solid.part_shape()
     for face in shape.Faces:
         face.check(True)  # raises on what the boolean operations' analyzer finds
