@@ -65,8 +65,8 @@
 
 #include <algorithm>
 #include <array>
-#include <exception>
 #include <chrono>
+#include <exception>
 #include <functional>
 #include <cmath>
 #include <limits>

@@ -347,12 +347,12 @@ std::vector<Vector2> even_sample(const std::vector<Vector2>& points) {
   return sample;
 }
 
-// The wedge fitted to `points` sharp and rounded: the least sums of squared residuals, the radius
-// (searched over log r between `smallest` and `largest`: a grid, then golden section around its
-// best) and the offsets of the rounded one. None when no rounding fits better than the sharp corner,
-// or the best is at the largest radius (no fillet of the band's size).
+// The wedge fitted to `points` rounded: the radius (searched over log r between `smallest` and
+// `largest`: a grid, then golden section around its best) and the offsets of the least sum of
+// squared residuals. None when no rounding fits better than the sharp corner, or the best is at the
+// largest radius (no fillet of the band's size).
 struct Fillet {
-  double sharp = 0.0, rounded = 0.0, radius = 0.0;
+  double radius = 0.0;
   Vector2 offset = Vector2::Zero();
 };
 
@@ -360,13 +360,13 @@ std::optional<Fillet> fit_fillet(const Wedge& w, const std::vector<Vector2>& poi
   if (!(largest > smallest)) return std::nullopt;
   Fillet best;
   Vector2 sharp_offset = Vector2::Zero();
-  best.sharp = fit_offsets(w, points, 0.0, sharp_offset);
-  best.rounded = std::numeric_limits<double>::infinity();
+  const double sharp = fit_offsets(w, points, 0.0, sharp_offset);
+  double least_rounded = std::numeric_limits<double>::infinity();
   Vector2 offset = sharp_offset;  // warm: from the previous radius
   double best_log_r = 0.0;
   auto rounded = [&](double log_r) {
     const double value = fit_offsets(w, points, std::exp(log_r), offset);
-    if (value < best.rounded) best.rounded = value, best_log_r = log_r, best.offset = offset;
+    if (value < least_rounded) least_rounded = value, best_log_r = log_r, best.offset = offset;
     return value;
   };
   constexpr int kGrid = 12;
@@ -377,7 +377,7 @@ std::optional<Fillet> fit_fillet(const Wedge& w, const std::vector<Vector2>& poi
     const double value = rounded(lo + (hi - lo) * i / kGrid);
     if (value < least) least = value, arg = i;
   }
-  if (!(least < best.sharp) || arg == kGrid) return std::nullopt;
+  if (!(least < sharp) || arg == kGrid) return std::nullopt;
   double x0 = lo + (hi - lo) * std::max(arg - 1, 0) / kGrid, x1 = lo + (hi - lo) * (arg + 1) / kGrid;
   const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
   double u = x1 - golden * (x1 - x0), v = x0 + golden * (x1 - x0);
