@@ -581,10 +581,16 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
   std::vector<std::pair<int, int>> absorbed;  // (large, piece): the large patch's surface explains the piece
   const double normal_floor = options.normal_floor_degrees * M_PI / 180.0;
   const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
-  for (size_t i = 0; i < pairs.size(); ++i) {
-    progress.step(static_cast<double>(i) / pairs.size());
+  // Each pair is judged on its own (reading the features, points and labels only): on two threads,
+  // the verdicts then taken in the pairs' order.
+  enum class Verdict { kUnchanged, kAbsorbed, kMerged, kRejected };
+  struct Judgement {
+    Verdict verdict = Verdict::kUnchanged;
+    Candidate candidate;  // kAbsorbed: (large, piece); kMerged: the pair and its surface
+  };
+  auto judge = [&](size_t i) -> Judgement {
     const int a = pairs[i].first, b = pairs[i].second;  // (not a structured binding: lambdas below capture them)
-    if (rejected.count({a, b})) continue;  // neither changed since
+    if (rejected.count({a, b})) return {};  // neither changed since
     const Feature &fa = features[a], &fb = features[b];
     const PatchPoints &pa = points[a], &pb = points[b];
     const bool a_small = pa.points.rows() < kInteriorPoints, b_small = pb.points.rows() < kInteriorPoints;
@@ -618,14 +624,11 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
         fit_residuals(larger.surface, smaller_points.points, smaller_points.weights, rms, max_error);
         explained = rms <= options.residual_ratio * std::max(smaller.rms, noise) && piece.normal_rms <= normal_limit;
       }
-      if (explained) {
-        absorbed.push_back({a_larger ? a : b, a_larger ? b : a});
-        continue;
-      }
+      if (explained) return {Verdict::kAbsorbed, {0.0, a_larger ? a : b, a_larger ? b : a, Feature()}};
     }
     // Two large patches of different types make one surface only on an exact tessellation: a coarse
     // torus falls into bands between its meridians, each of which a cylinder or cone fits exactly.
-    if (!same_type && !a_small && !b_small && !exact) continue;
+    if (!same_type && !a_small && !b_small && !exact) return {};
     // On a noisy mesh, two cylinders of one radius whose axes turn may be sectors of another surface
     // that the histogram cut up: a torus's tube (a wide blend whose mean curvature passes through
     // zero), a slender cone. Their union is identified afresh.
@@ -731,8 +734,17 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
         if (type == SurfaceType::Cylinder && !bends) break;
       }
     }
-    if (ok) candidates.push_back({merged.rms / limit, a, b, merged});
-    else rejected.insert({a, b});
+    if (!ok) return {Verdict::kRejected, {0.0, a, b, Feature()}};
+    return {Verdict::kMerged, {merged.rms / limit, a, b, merged}};
+  };
+  std::vector<Judgement> judgements(pairs.size());
+  std::vector<int> order(pairs.size());
+  std::iota(order.begin(), order.end(), 0);
+  on_two_threads(order, [&](int i) { judgements[i] = judge(i); }, progress);
+  for (Judgement& j : judgements) {
+    if (j.verdict == Verdict::kAbsorbed) absorbed.push_back({j.candidate.a, j.candidate.b});
+    if (j.verdict == Verdict::kMerged) candidates.push_back(std::move(j.candidate));
+    if (j.verdict == Verdict::kRejected) rejected.insert({j.candidate.a, j.candidate.b});
   }
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
     return x.cost != y.cost ? x.cost < y.cost : std::make_pair(x.a, x.b) < std::make_pair(y.a, y.b);

@@ -1,5 +1,7 @@
 #include "shared_axes.h"
 
+#include "parallel.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -316,29 +318,30 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
   for (size_t f = 0; f < features.size(); ++f)
     if (determined_axis(features[f], points[f], options))
       axes.push_back({features[f].surface.point, features[f].surface.axis, static_cast<int>(f)});
-  int changed = 0;
-  for (size_t f = 0; f < features.size(); ++f) {
+  // Each feature reads the axes gathered above and changes only itself: on two threads.
+  std::vector<char> changed(features.size(), 0);
+  on_two_threads_as_free(static_cast<int>(features.size()), [&](int f) {
     Feature& feature = features[f];
     const FitData& data = points[f];
     const bool plane = feature.type == SurfaceType::Plane, sphere = feature.type == SurfaceType::Sphere;
-    if (!plane && !sphere && feature.type != SurfaceType::Cylinder && feature.type != SurfaceType::Cone) continue;
-    if (data.points.rows() < 2 * parameter_count(feature.type)) continue;
+    if (!plane && !sphere && feature.type != SurfaceType::Cylinder && feature.type != SurfaceType::Cone) return;
+    if (data.points.rows() < 2 * parameter_count(feature.type)) return;
     // On another feature's axis already: idealization aligns it.
     if (!plane && !sphere && std::any_of(axes.begin(), axes.end(), [&](const Axis& a) {
-          return a.source != static_cast<int>(f) && same_axis(feature.surface, a, options);
+          return a.source != f && same_axis(feature.surface, a, options);
         }))
-      continue;
-    const bool determined = std::any_of(axes.begin(), axes.end(), [&](const Axis& a) { return a.source == static_cast<int>(f); });
-    if (options.only_determined && !determined) continue;
+      return;
+    const bool determined = std::any_of(axes.begin(), axes.end(), [&](const Axis& a) { return a.source == f; });
+    if (options.only_determined && !determined) return;
     // Candidates by RMS (cheap); the spreads decide for the best one.
     const double rms_limit = plane ? feature.rms : options.residual_ratio * feature.rms + options.distance_tolerance;
     SurfaceFit best;
     for (const Axis& axis : axes) {
-      if (axis.source == static_cast<int>(f)) continue;
+      if (axis.source == f) continue;
       const SurfaceFit fit = fit_about(data, axis, options);
       if (fit.valid && fit.rms < rms_limit && (!best.valid || fit.rms < best.rms)) best = fit;
     }
-    if (!best.valid) continue;
+    if (!best.valid) return;
     if (determined) {
       // Its own axis is one more axis of the part only where the data need it: the BIC for the four
       // parameters of an axis of its own (a narrow band of revolution tilts its fit by a degree
@@ -346,10 +349,10 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
       const double n = static_cast<double>(data.points.rows());
       if (best.surface.type != feature.type || !(feature.rms > 0.0) ||
           n * std::log(best.rms * best.rms / (feature.rms * feature.rms)) > 4.0 * std::log(n))
-        continue;
+        return;
       feature.set_fit(best);
-      ++changed;
-      continue;
+      changed[f] = 1;
+      return;
     }
     measure_spreads(data, best);
     const bool normals_fit =
@@ -358,11 +361,11 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
                                                   turn_across(best.surface, data) > options.angle_tolerance
                                             : best.spread <= options.residual_ratio * feature.spread +
                                                                  options.distance_tolerance);
-    if (!fits) continue;
+    if (!fits) return;
     feature.set_fit(best);
-    ++changed;
-  }
-  return changed;
+    changed[f] = 1;
+  });
+  return static_cast<int>(std::count(changed.begin(), changed.end(), 1));
 }
 
 }  // namespace idealize
