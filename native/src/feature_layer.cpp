@@ -1607,7 +1607,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       std::map<int, Surface> generalized;  // regions that grew on as tori (id -> torus)
       // Grows the surfaces that fit discs of patch p. A patch that the histograms call curved has no
       // planar regions: across a disc, the sag of a large fillet hides within the distance tolerance.
-      auto grow_surfaces = [&](int p, const ProgressSpan& span) {
+      auto grow_surfaces = [&](int p, std::vector<int>& into, int first_id, std::map<int, Surface>& tori,
+                               const ProgressSpan& span) {
         const bool curved = curvature_type(curvature[p], zero_mean_curvature) != SurfaceType::Plane;
         return split_into_surfaces(
             mesh, topology, p, noise, normal_noise, split_above, 2 * kInteriorPoints,
@@ -1615,7 +1616,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
               return identify(pp, curvature[p], zero_mean_curvature, options, layer.distance_tolerance,
                               curved);
             },
-            options.fit, layer.labels, next_id, generalized, span);
+            options.fit, into, first_id, tori, span);
       };
       // Identification takes the simplest surface within the tolerance, which on a sector of a
       // tube's bend is a cylinder: a region that grew as a torus (above) stays one where the torus
@@ -1630,17 +1631,52 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       };
       // On a noisy mesh, surfaces grow in a large patch first (fillets of one radius in a chain);
       // planar regions split the rest.
+      // A patch splits by its own faces alone (the others' labels only tell them apart): on two
+      // threads, each into its copy of the labels with new ids from next_id on (and its patch's
+      // faces set back after each); the pieces are then numbered on in patch order, as splitting
+      // one patch after the other numbers them.
+      struct Pieces {
+        std::vector<std::pair<int, int>> faces;  // (face, its new label)
+        int count = 0;                            // new ids
+        std::map<int, Surface> tori;              // new id -> torus (generalized)
+      };
       const std::vector<int> first_count = triangle_counts();
+      std::vector<char> splitting(num_patches, 0);
+      for (int p = 0; p < num_patches; ++p)
+        if (badly_fitting(layer.features[p])) {
+          splitting[p] = 1;
+          was_split[p] = exact_mesh ? 1 : 2;
+        }
+      std::vector<Pieces> pieces(num_patches);
+      std::vector<std::vector<int>> faces_of(num_patches);
+      for (int f = 0; f < mesh.num_faces(); ++f)
+        if (layer.labels[f] >= 0 && splitting[layer.labels[f]]) faces_of[layer.labels[f]].push_back(f);
+      const int first_new = next_id;
+      const std::vector<int> order = largest_first(points, splitting);
+      const ProgressSpan splitting_span = split.sub(0.0, 0.5);
+      on_two_threads([&](size_t half) {
+        std::vector<int> split_labels = layer.labels;
+        for (size_t k = half; k < order.size(); k += 2) {
+          if (half == 0) splitting_span.step(static_cast<double>(k) / order.size());
+          const int p = order[k];
+          int end = first_new;
+          if (!exact_mesh && first_count[p] >= 4 * kInteriorPoints)
+            end = grow_surfaces(p, split_labels, first_new, pieces[p].tori, ProgressSpan());
+          if (end == first_new)
+            end = split_patch(mesh, topology, area, p, noise, normal_noise, exact_mesh ? 1 : 2 * kInteriorPoints,
+                              split_labels, first_new, ProgressSpan());
+          pieces[p].count = end - first_new;
+          for (int f : faces_of[p]) {
+            if (split_labels[f] != p) pieces[p].faces.push_back({f, split_labels[f]});
+            split_labels[f] = p;
+          }
+        }
+      });
       for (int p = 0; p < num_patches; ++p) {
-        const ProgressSpan this_patch = split.sub(0.0, 0.5).sub(static_cast<double>(p) / num_patches,
-                                                                static_cast<double>(p + 1) / num_patches);
-        if (!badly_fitting(layer.features[p])) continue;
-        was_split[p] = exact_mesh ? 1 : 2;
-        const int before = next_id;
-        if (!exact_mesh && first_count[p] >= 4 * kInteriorPoints) next_id = grow_surfaces(p, this_patch);
-        if (next_id == before)
-          next_id = split_patch(mesh, topology, area, p, noise, normal_noise, exact_mesh ? 1 : 2 * kInteriorPoints,
-                                layer.labels, next_id, this_patch);
+        const int shift = next_id - first_new;
+        for (const auto& [f, id] : pieces[p].faces) layer.labels[f] = id >= first_new ? id + shift : id;
+        for (const auto& [id, torus] : pieces[p].tori) generalized[id + shift] = torus;
+        next_id += pieces[p].count;
       }
       if (next_id > num_patches) {
         std::vector<char> which(next_id, 0);
@@ -1665,7 +1701,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         for (int p = 0; p < pieces; ++p) {
           if (count[p] < 4 * kInteriorPoints || !badly_fitting(layer.features[p])) continue;
           const int first_new = next_id;
-          next_id = grow_surfaces(p, split.sub(0.8, 0.9));
+          next_id = grow_surfaces(p, layer.labels, next_id, generalized, split.sub(0.8, 0.9));
           curvature.resize(next_id, curvature[p]);
           which.resize(next_id, 1);
           which[p] = next_id > first_new;
