@@ -1630,11 +1630,10 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         }
       };
       // On a noisy mesh, surfaces grow in a large patch first (fillets of one radius in a chain);
-      // planar regions split the rest.
-      // A patch splits by its own faces alone (the others' labels only tell them apart): on two
-      // threads, each into its copy of the labels with new ids from next_id on (and its patch's
-      // faces set back after each); the pieces are then numbered on in patch order, as splitting
-      // one patch after the other numbers them.
+      // planar regions split the rest. A patch splits by its own faces alone (the others' labels
+      // only tell them apart): on two threads, each into its copy of the labels with new ids from
+      // next_id on (and its patch's faces set back after each); the pieces are then numbered on in
+      // patch order, as splitting one patch after the other numbers them.
       struct Pieces {
         std::vector<std::pair<int, int>> faces;  // (face, its new label)
         int count = 0;                            // new ids
@@ -1647,11 +1646,11 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
           splitting[p] = 1;
           was_split[p] = exact_mesh ? 1 : 2;
         }
-      std::vector<Pieces> pieces(num_patches);
+      std::vector<Pieces> split_pieces(num_patches);
       std::vector<std::vector<int>> faces_of(num_patches);
       for (int f = 0; f < mesh.num_faces(); ++f)
         if (layer.labels[f] >= 0 && splitting[layer.labels[f]]) faces_of[layer.labels[f]].push_back(f);
-      const int first_new = next_id;
+      const int first_piece_id = next_id;
       const std::vector<int> order = largest_first(points, splitting);
       const ProgressSpan splitting_span = split.sub(0.0, 0.5);
       on_two_threads([&](size_t half) {
@@ -1659,24 +1658,24 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         for (size_t k = half; k < order.size(); k += 2) {
           if (half == 0) splitting_span.step(static_cast<double>(k) / order.size());
           const int p = order[k];
-          int end = first_new;
+          int end = first_piece_id;
           if (!exact_mesh && first_count[p] >= 4 * kInteriorPoints)
-            end = grow_surfaces(p, split_labels, first_new, pieces[p].tori, ProgressSpan());
-          if (end == first_new)
+            end = grow_surfaces(p, split_labels, first_piece_id, split_pieces[p].tori, ProgressSpan());
+          if (end == first_piece_id)
             end = split_patch(mesh, topology, area, p, noise, normal_noise, exact_mesh ? 1 : 2 * kInteriorPoints,
-                              split_labels, first_new, ProgressSpan());
-          pieces[p].count = end - first_new;
+                              split_labels, first_piece_id, ProgressSpan());
+          split_pieces[p].count = end - first_piece_id;
           for (int f : faces_of[p]) {
-            if (split_labels[f] != p) pieces[p].faces.push_back({f, split_labels[f]});
+            if (split_labels[f] != p) split_pieces[p].faces.push_back({f, split_labels[f]});
             split_labels[f] = p;
           }
         }
       });
       for (int p = 0; p < num_patches; ++p) {
-        const int shift = next_id - first_new;
-        for (const auto& [f, id] : pieces[p].faces) layer.labels[f] = id >= first_new ? id + shift : id;
-        for (const auto& [id, torus] : pieces[p].tori) generalized[id + shift] = torus;
-        next_id += pieces[p].count;
+        const int shift = next_id - first_piece_id;
+        for (const auto& [f, id] : split_pieces[p].faces) layer.labels[f] = id >= first_piece_id ? id + shift : id;
+        for (const auto& [id, torus] : split_pieces[p].tori) generalized[id + shift] = torus;
+        next_id += split_pieces[p].count;
       }
       if (next_id > num_patches) {
         std::vector<char> which(next_id, 0);
