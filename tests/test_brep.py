@@ -693,6 +693,25 @@ def test_cad_export_of_a_slotted_screw_gives_its_solid():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_scan_of_a_slotted_screw_gives_its_solid():
+    """The benchmark's scan of occt_screw: each half of its head's dome (a lemon, 9° of arc) fitted a
+    free cylinder with a tilted axis as well as the noise allows, and the slot's walls, the part's
+    largest planes, tilted the axis of the whole part by 0.3° when their normals set its frame. Each
+    half is a lemon about the shank's axis, and the best-determined direction sets the frame: the
+    solid has the part's surface types and faces."""
+    m = shapes.benchmark_mesh("occt_screw.step", "scan")
+    truth = shapes.benchmark_truth("occt_screw.step")
+    layer = idealize.idealize(Mesh(m.V, m.F))
+    for lemon in (f for f in layer.features if f["type"] == "torus"):
+        assert lemon["params"]["major"] < 0 and abs(lemon["params"]["minor"] / 54.87 - 1) < 0.1
+    solid = idealize.make_solid(layer)
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == truth["surface_types"] and solid.faces == truth["faces"]
+    assert abs(solid.volume / truth["volume"] - 1) < 2e-2
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_scan_of_coaxial_blends_closes():
     """The benchmark's scan of as_customblend_05: tori and a cone between cylinders and planes about
     one axis, 10 m from the origin. Its rim tori's bands and the cone between two tori were invalid

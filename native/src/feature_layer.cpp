@@ -1399,6 +1399,7 @@ void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, co
   for (size_t p = 0; p < features.size(); ++p)
     reach[p] = std::sqrt(2.0 * std::log(std::max(1.0, 50.0 * features[p].triangles)));
   std::vector<int> around;
+  std::vector<double> offsets;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     progress.tick(v, mesh.num_vertices());
     around.clear();
@@ -1420,21 +1421,24 @@ void project_vertices(const TriangleMesh& mesh, const MeshTopology& topology, co
     // A surface that does not explain the vertex does not move it: beyond 3 σ of its fit the vertex
     // lies in a part of the patch the feature does not describe (a fillet too narrow to be found),
     // unless the noise put it there: within the patch's reach, with neighbours in the patch whose
-    // mean distance is within 3 σ of the mean of as many (those in an undescribed part are off
+    // median distance is within 3 σ of the median of as many (those in an undescribed part are off
     // together; those across a sharp edge are another surface's: a scan's vertex on a sharp edge
-    // goes to the edge, a small face that no feature took is cut back to its neighbours' edge).
+    // goes to the edge, a small face that no feature took is cut back to its neighbours' edge). The
+    // median, not the mean: one of a few hundred noise outliers has another among its neighbours,
+    // which alone took the mean of five beyond its limit (a box's scan).
     auto noise_outlier = [&](int p, double sigma) {
-      double sum = 0.0;
-      int count = 0;
+      offsets.clear();
       for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f) {
         if (labels[*f] != p) continue;
         for (int c = 0; c < 3; ++c)
-          if (mesh.F(*f, c) != v) {  // each neighbour twice on a closed fan
-            sum += signed_distance(features[p].surface, mesh.V.row(mesh.F(*f, c)).transpose());
-            ++count;
-          }
+          if (mesh.F(*f, c) != v)  // each neighbour twice on a closed fan
+            offsets.push_back(signed_distance(features[p].surface, mesh.V.row(mesh.F(*f, c)).transpose()));
       }
-      return count > 0 && std::abs(sum / count) <= 3.0 * sigma / std::sqrt(0.5 * count);
+      if (offsets.empty()) return false;
+      std::nth_element(offsets.begin(), offsets.begin() + offsets.size() / 2, offsets.end());
+      // The median of k samples spreads by sqrt(pi / 2) σ / sqrt(k).
+      const double median_spread = std::sqrt(0.5 * M_PI) * sigma / std::sqrt(0.5 * offsets.size());
+      return std::abs(offsets[offsets.size() / 2]) <= 3.0 * median_spread;
     };
     around.erase(std::remove_if(around.begin(), around.end(), [&](int p) {
                    const double sigma = features[p].spread + kExactFraction * tolerance;

@@ -35,20 +35,32 @@ struct Frame {
   Eigen::Vector3d x, y, z;
 };
 
-// Z: the normal of the largest plane; X: the largest feature direction orthogonal to it; neither
-// from the features whose directions stay as fitted (`unsnapped`).
+// Z: the best-determined direction of the part, the one that the most area shares (a parallel
+// group's members share their mean direction by now); X: the largest feature direction orthogonal
+// to it; neither from the features whose directions stay as fitted (`unsnapped`). (Not the largest
+// plane's normal: the walls of a screw's slot, tilted by the noise, tilted the axis of its shank,
+// head and dome with them, and the dome's halves no longer met.)
 bool part_frame(const std::vector<Feature>& features, const std::vector<char>& unsnapped, double sin_tolerance,
                 Frame& frame) {
-  int plane = -1;
+  const double cos_tolerance = std::sqrt(1.0 - sin_tolerance * sin_tolerance);
+  std::vector<int> directed;
   for (const Feature& f : features)
-    if (f.type == SurfaceType::Plane && !unsnapped[f.id] && (plane < 0 || f.area > features[plane].area)) plane = f.id;
-  if (plane < 0) return false;
-  frame.z = features[plane].surface.axis;
+    if (analytic(f) && f.surface.has_direction() && !unsnapped[f.id]) directed.push_back(f.id);
+  if (directed.empty()) return false;
+  int z = -1;
+  double most = 0.0;
+  for (int f : directed) {
+    double along = 0.0;
+    for (int g : directed)
+      if (std::abs(features[f].surface.axis.dot(features[g].surface.axis)) >= cos_tolerance) along += features[g].area;
+    if (z < 0 || along > most) z = f, most = along;
+  }
+  frame.z = features[z].surface.axis;
   int second = -1;
-  for (const Feature& f : features)
-    if (analytic(f) && f.surface.has_direction() && !unsnapped[f.id] &&
-        std::abs(f.surface.axis.dot(frame.z)) <= sin_tolerance && (second < 0 || f.area > features[second].area))
-      second = f.id;
+  for (int f : directed)
+    if (std::abs(features[f].surface.axis.dot(frame.z)) <= sin_tolerance &&
+        (second < 0 || features[f].area > features[second].area))
+      second = f;
   if (second >= 0) {
     const Eigen::Vector3d d = features[second].surface.axis;
     frame.x = (d - d.dot(frame.z) * frame.z).normalized();

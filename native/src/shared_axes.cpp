@@ -33,17 +33,48 @@ bool same_axis(const Surface& s, const Axis& axis, const SharedAxisOptions& opti
   return axial_coordinates(axis.origin, axis.direction, s.point).distance <= options.distance_tolerance;
 }
 
+// Free parameters of a surface of the type about a given axis (its 4 fixed).
+int parameters_about_axis(SurfaceType type) { return parameter_count(type) - 4; }
+
+// Whether `a` (k_a parameters) explains n points better than `b` (k_b > k_a, or fewer) by the BIC,
+// n log(rms²) + k log n.
+bool bic_prefers(double rms_a, int k_a, double rms_b, int k_b, double n) {
+  if (!(rms_a > 0.0) || !(rms_b > 0.0)) return rms_a <= rms_b;
+  return n * std::log(rms_a * rms_a) + k_a * std::log(n) < n * std::log(rms_b * rms_b) + k_b * std::log(n);
+}
+
+// Whether the points go about the axis by a right angle or more (the mean of their directions from
+// it is as short as a quarter circle's): a torus about an axis that a patch does not go round
+// passes for any tube along it.
+bool goes_round(const FitData& data, const Axis& axis) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (Eigen::Index i = 0; i < data.points.rows(); ++i)
+    mean += data.weights[i] * axial_coordinates(axis.origin, axis.direction, data.points.row(i).transpose()).radial;
+  return mean.norm() <= kRightAngleMeanNormal * data.weights.sum();
+}
+
 // The simpler of a cylinder and a cone about the axis that fits (by RMS, as identification
-// chooses); invalid if neither does or the cone is really a cylinder or a plane.
-SurfaceFit fit_about(const FitData& data, const Axis& axis, const SharedAxisOptions& options) {
+// chooses); invalid if neither does or the cone is really a cylinder or a plane. With `torus`, the
+// torus about the axis where the BIC prefers it to that and the points go round the axis: a noisy
+// dome revolved from a wide arc (a screw head) sags from its cone by less than the distance
+// tolerance. (It is a sphere where its tube's centre lies on the axis.)
+SurfaceFit fit_about(const FitData& data, const Axis& axis, const SharedAxisOptions& options, bool torus) {
   const SurfaceFit cylinder = fit_about_axis(SurfaceType::Cylinder, data, axis.origin, axis.direction);
   SurfaceFit cone = fit_about_axis(SurfaceType::Cone, data, axis.origin, axis.direction);
   const double half_angle = cone.surface.half_angle;
   if (half_angle < options.angle_tolerance || half_angle > 0.5 * M_PI - options.angle_tolerance) cone.valid = false;
-  if (!cone.valid) return cylinder;
-  if (!cylinder.valid) return cone;
-  const double best = std::min(cylinder.rms, cone.rms);
-  return cylinder.rms <= options.residual_ratio * best + options.distance_tolerance ? cylinder : cone;
+  SurfaceFit simple = cone.valid ? cone : cylinder;
+  if (cone.valid && cylinder.valid &&
+      cylinder.rms <= options.residual_ratio * std::min(cylinder.rms, cone.rms) + options.distance_tolerance)
+    simple = cylinder;
+  if (!torus || !goes_round(data, axis)) return simple;
+  const SurfaceFit ring = fit_about_axis(SurfaceType::Torus, data, axis.origin, axis.direction);
+  if (!ring.valid || std::abs(ring.surface.radius) <= options.distance_tolerance) return simple;
+  const double n = static_cast<double>(data.points.rows());
+  if (simple.valid && !bic_prefers(ring.rms, parameters_about_axis(SurfaceType::Torus), simple.rms,
+                                   parameters_about_axis(simple.surface.type), n))
+    return simple;
+  return ring;
 }
 
 // The largest angle (radians) between the surface's normals at the samples of `data`.
@@ -338,17 +369,16 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
     SurfaceFit best;
     for (const Axis& axis : axes) {
       if (axis.source == f) continue;
-      const SurfaceFit fit = fit_about(data, axis, options);
+      const SurfaceFit fit = fit_about(data, axis, options, determined);
       if (fit.valid && fit.rms < rms_limit && (!best.valid || fit.rms < best.rms)) best = fit;
     }
     if (!best.valid) return;
     if (determined) {
       // Its own axis is one more axis of the part only where the data need it: the BIC for the four
       // parameters of an axis of its own (a narrow band of revolution tilts its fit by a degree
-      // within the noise).
-      const double n = static_cast<double>(data.points.rows());
-      if (best.surface.type != feature.type || !(feature.rms > 0.0) ||
-          n * std::log(best.rms * best.rms / (feature.rms * feature.rms)) > 4.0 * std::log(n))
+      // within the noise), and for the profile (the dome of a screw head fits a tilted cylinder).
+      if (!bic_prefers(best.rms, parameters_about_axis(best.surface.type), feature.rms,
+                       parameter_count(feature.type), static_cast<double>(data.points.rows())))
         return;
       feature.set_fit(best);
       changed[f] = 1;

@@ -483,12 +483,92 @@ SurfaceFit fit_surface(SurfaceType type, const FitData& data, const FitOptions& 
   return fit;
 }
 
+namespace {
+
+// The circle through 2-D points of weights w (any scale): Taubin's algebraic fit, nearly unbiased on
+// a short noisy arc where the plain algebraic fit shrinks the circle (G. Taubin, "Estimation of
+// planar curves, surfaces and nonplanar space curves defined by implicit equations", IEEE PAMI
+// 13(11), 1991; solved by Newton's method on its characteristic polynomial after N. Chernov), then
+// Gauss-Newton steps on the geometric distances. False where the points lie on a line.
+bool profile_circle(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& w, Eigen::Vector2d& centre,
+                    double& radius) {
+  double total = 0.0;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < q.size(); ++i) {
+    total += w[i];
+    mean += w[i] * q[i];
+  }
+  if (!(total > 0.0)) return false;
+  mean /= total;
+  double mxx = 0, myy = 0, mxy = 0, mxz = 0, myz = 0, mzz = 0;
+  for (size_t i = 0; i < q.size(); ++i) {
+    const Eigen::Vector2d d = q[i] - mean;
+    const double z = d.squaredNorm(), v = w[i] / total;
+    mxx += v * d.x() * d.x();
+    myy += v * d.y() * d.y();
+    mxy += v * d.x() * d.y();
+    mxz += v * d.x() * z;
+    myz += v * d.y() * z;
+    mzz += v * z * z;
+  }
+  const double mz = mxx + myy, cov_xy = mxx * myy - mxy * mxy, var_z = mzz - mz * mz;
+  const double a3 = 4.0 * mz, a2 = -3.0 * mz * mz - mzz;
+  const double a1 = var_z * mz + 4.0 * cov_xy * mz - mxz * mxz - myz * myz;
+  const double a0 = mxz * (mxz * myy - myz * mxy) + myz * (myz * mxx - mxz * mxy) - var_z * cov_xy;
+  double x = 0.0, y = a0;
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    const double dy = a1 + x * (2.0 * a2 + 3.0 * a3 * x);
+    const double next = x - y / dy;
+    if (!std::isfinite(next)) return false;
+    const double next_y = a0 + next * (a1 + next * (a2 + next * a3));
+    if (std::abs(next_y) >= std::abs(y)) break;
+    x = next;
+    y = next_y;
+  }
+  const double det = x * x - x * mz + cov_xy;
+  if (!(std::abs(det) > 0.0)) return false;
+  centre = mean + Eigen::Vector2d(mxz * (myy - x) - myz * mxy, myz * (mxx - x) - mxz * mxy) / (2.0 * det);
+  radius = std::sqrt((centre - mean).squaredNorm() + mz);
+  // Gauss-Newton on the distances |q - c| - r, kept while they shrink.
+  auto cost = [&](const Eigen::Vector2d& c, double r) {
+    double sum = 0.0;
+    for (size_t i = 0; i < q.size(); ++i) sum += w[i] * std::pow((q[i] - c).norm() - r, 2);
+    return sum;
+  };
+  double current = cost(centre, radius);
+  for (int iteration = 0; iteration < 20 && std::isfinite(current); ++iteration) {
+    Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d jtr = Eigen::Vector3d::Zero();
+    for (size_t i = 0; i < q.size(); ++i) {
+      const Eigen::Vector2d d = q[i] - centre;
+      const double length = d.norm();
+      if (!(length > 0.0)) continue;
+      const Eigen::Vector3d j(-d.x() / length, -d.y() / length, -1.0);
+      jtj += w[i] * j * j.transpose();
+      jtr += w[i] * j * (length - radius);
+    }
+    const Eigen::Vector3d step = jtj.ldlt().solve(-jtr);
+    if (!step.allFinite()) break;
+    const Eigen::Vector2d next_centre = centre + step.head<2>();
+    const double next_radius = radius + step.z(), next = cost(next_centre, next_radius);
+    if (!(next < current)) break;
+    centre = next_centre;
+    radius = next_radius;
+    current = next;
+  }
+  return centre.allFinite() && std::isfinite(radius) && radius > 0.0;
+}
+
+}  // namespace
+
 SurfaceFit fit_about_axis(SurfaceType type, const FitData& data, const Eigen::Vector3d& origin,
                           const Eigen::Vector3d& axis) {
   SurfaceFit fit;
   fit.surface.type = type;
   const double total = data.weights.sum();
-  if ((type != SurfaceType::Cylinder && type != SurfaceType::Cone) || data.points.rows() < 2 || !(total > 0.0))
+  const bool torus = type == SurfaceType::Torus;
+  if ((type != SurfaceType::Cylinder && type != SurfaceType::Cone && !torus) || data.points.rows() < (torus ? 3 : 2) ||
+      !(total > 0.0))
     return fit;
   // Profile: height z along the axis, distance ρ from it; weighted means and covariance.
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
@@ -504,6 +584,20 @@ SurfaceFit fit_about_axis(SurfaceType type, const FitData& data, const Eigen::Ve
   if (type == SurfaceType::Cylinder) {
     s.point = origin;
     s.radius = mean.y();
+  } else if (torus) {
+    // The profile's circle: its centre's height fixes the centre, its distance from the axis the
+    // major radius (negative beyond the axis: a lemon), its radius the minor one.
+    std::vector<double> w(data.weights.data(), data.weights.data() + data.weights.size());
+    Eigen::Vector2d centre;
+    double radius;
+    if (!profile_circle(zr, w, centre, radius)) return fit;
+    s.point = origin + centre.x() * axis;
+    s.radius = centre.y();
+    s.minor = radius;
+    if (!plausible(s, s.radius < 0.0)) return fit;
+    fit_residuals(s, data.points, data.weights, fit.rms, fit.max_error);
+    fit.valid = true;
+    return fit;
   } else {
     Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
     for (size_t i = 0; i < zr.size(); ++i) cov += data.weights[i] * (zr[i] - mean) * (zr[i] - mean).transpose();

@@ -65,9 +65,10 @@ struct SurfaceFit {
 SurfaceFit fit_surface(SurfaceType type, const FitData& data, const FitOptions& options = {},
                        const Surface* initial = nullptr);
 
-// Fits a cylinder or cone (`type`) whose axis is the line through `origin` along `axis` (unit) to
-// `data`: only the profile is fitted (radius; apex and half-angle, by a total-least-squares line
-// through the points' heights along and distances from the axis). The thesis's semi-defined
+// Fits a cylinder, cone or torus (`type`) whose axis is the line through `origin` along `axis`
+// (unit) to `data`: only the profile is fitted (radius; apex and half-angle, by a total-least-squares
+// line through the points' heights along and distances from the axis; a torus's centre height and
+// radii by the circle through them, a lemon where its centre lies beyond the axis). The thesis's semi-defined
 // features (4.3), whose axis a related feature defines. Invalid where the profile is not of the
 // type (a cone's line along or across the axis). The spreads are left to measure_spreads.
 SurfaceFit fit_about_axis(SurfaceType type, const FitData& data, const Eigen::Vector3d& origin,
