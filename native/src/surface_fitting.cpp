@@ -490,7 +490,7 @@ namespace {
 // planar curves, surfaces and nonplanar space curves defined by implicit equations", IEEE PAMI
 // 13(11), 1991; solved by Newton's method on its characteristic polynomial after N. Chernov), then
 // Gauss-Newton steps on the geometric distances. False where the points lie on a line.
-bool profile_circle(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& w, Eigen::Vector2d& centre,
+bool profile_circle(const std::vector<Eigen::Vector2d>& q, const Eigen::VectorXd& w, Eigen::Vector2d& centre,
                     double& radius) {
   double total = 0.0;
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
@@ -587,10 +587,9 @@ SurfaceFit fit_about_axis(SurfaceType type, const FitData& data, const Eigen::Ve
   } else if (torus) {
     // The profile's circle: its centre's height fixes the centre, its distance from the axis the
     // major radius (negative beyond the axis: a lemon), its radius the minor one.
-    std::vector<double> w(data.weights.data(), data.weights.data() + data.weights.size());
     Eigen::Vector2d centre;
     double radius;
-    if (!profile_circle(zr, w, centre, radius)) return fit;
+    if (!profile_circle(zr, data.weights, centre, radius)) return fit;
     s.point = origin + centre.x() * axis;
     s.radius = centre.y();
     s.minor = radius;
