@@ -31,6 +31,12 @@ def surface_types(solid):
     return counts
 
 
+def covered_area(solid, deflection):
+    """The area of the solid's mesh at `deflection`: its surface's, less what no facet covers."""
+    V, F = solid.triangulate(deflection)
+    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1).sum()
+
+
 def solid_of(part, tolerance=0.05, noise=0.0):
     V, F, _ = shapes.tessellate_with_faces(part, tolerance)
     if noise:
@@ -615,12 +621,6 @@ def test_a_solid_has_no_face_that_a_mesh_cannot_cover(name, variant):
     else:
         assert any("no mesh covers it" in message or "wrong way round" in message for _, message in solid.problems)
         assert not solid.closed
-
-
-def covered_area(solid, deflection):
-    """The area of the solid's mesh at `deflection`: its surface's, less what no facet covers."""
-    V, F = solid.triangulate(deflection)
-    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1).sum()
 
 
 @needs_freecad

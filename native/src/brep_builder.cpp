@@ -665,7 +665,9 @@ class BrepBuilder {
   void make_faces(BrepResult& result);
   bool is_cap(size_t region) const;  // a cone or sphere bounded by one closed chain
   std::optional<TopoDS_Face> pole_cap(size_t region);
-  TopoDS_Shape assemble(BrepResult& result, const BrepOptions& options);
+  // The healed, sewn and merged shape; `closed_faults`: closed_shell_faults of the solid returned
+  // where merging had to judge its faces already, else empty.
+  TopoDS_Shape assemble(BrepResult& result, const BrepOptions& options, std::vector<std::string>& closed_faults);
   // The region whose surface `face` lies on, -1 none.
   int region_of(const TopoDS_Face& face) const;
 
@@ -1473,6 +1475,10 @@ std::vector<std::string> closed_shell_faults(const TopoDS_Shape& shape, double d
   return faults;
 }
 
+bool no_faults(const std::vector<std::string>& faults) {
+  return std::all_of(faults.begin(), faults.end(), [](const std::string& f) { return f.empty(); });
+}
+
 // Two edges of a wire that meet tangentially (a fillet's arc running into a larger arc) cross once
 // more beside their common vertex wherever that vertex lies a little off their exact point of
 // tangency, which BRepCheck takes for a self-intersecting wire unless the vertex's tolerance covers
@@ -1550,7 +1556,8 @@ int BrepBuilder::region_of(const TopoDS_Face& face) const {
   return -1;
 }
 
-TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& options) {
+TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& options,
+                                   std::vector<std::string>& closed_faults) {
   // Each face that needs it is healed on its own (pcurves shifted into one period, seams of
   // closed faces, degenerate edges at poles), then the faces are sewn: healing may replace an
   // edge in one face and not in its neighbour, and healing the whole shell at once
@@ -1673,9 +1680,9 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
       // (Merging may also leave faces that BRepCheck passes and no mesh covers: the sides of a
       // noisy rounded plate, merged with its corner cylinders, came out as planes bounded by their
       // whole outline.)
-      const std::vector<std::string> faults = closed_shell_faults(unify.Shape(), 0.01 * diagonal_, tol_);
-      result.valid = BRepCheck_Analyzer(unify.Shape(), Standard_True, Standard_True).IsValid() &&
-                     std::all_of(faults.begin(), faults.end(), [](const std::string& f) { return f.empty(); });
+      std::vector<std::string> faults = closed_shell_faults(unify.Shape(), 0.01 * diagonal_, tol_);
+      result.valid = BRepCheck_Analyzer(unify.Shape(), Standard_True, Standard_True).IsValid() && no_faults(faults);
+      if (result.valid) closed_faults = std::move(faults);
       if (result.valid || !BRepCheck_Analyzer(shape, Standard_True, Standard_True).IsValid()) return unify.Shape();
     } catch (const Standard_Failure&) {
     }
@@ -1767,7 +1774,8 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   make_faces(result);
   stage(result, "brep.faces", since);
 
-  TopoDS_Shape shape = assemble(result, options);
+  std::vector<std::string> closed_faults;
+  TopoDS_Shape shape = assemble(result, options, closed_faults);
   stage(result, "brep.sew", since);
   const ProgressSpan checking = progress_.sub("checking", 0.9, 1.0);
   checking.step(0.0);
@@ -1775,8 +1783,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   // Validated by assemble, a closed solid's faces by closed_shell_faults; an invalid result keeps
   // only its valid faces, as a shell (never an invalid solid).
   result.solid = result.valid && result.closed && shape.ShapeType() == TopAbs_SOLID;
-  std::vector<std::string> closed_faults;
-  if (result.solid) {
+  if (result.solid && closed_faults.empty()) {
     try {
       OCC_CATCH_SIGNALS
       closed_faults = closed_shell_faults(shape, 0.01 * diagonal_, tol_);
@@ -1784,8 +1791,8 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
       result.problems.push_back({-1, occt_message(failure, "the solid's faces could not be meshed")});
       result.solid = false;  // (no face to blame: the boolean operations' checks decide what stays)
     }
-    result.solid = result.solid && std::all_of(closed_faults.begin(), closed_faults.end(), [](const std::string& f) { return f.empty(); });
   }
+  result.solid = result.solid && no_faults(closed_faults);
   if (!result.solid) {
     // Only the faces that pass the boolean operations' checks are kept (shell_face_fault, which
     // only reads them: on two threads).
