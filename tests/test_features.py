@@ -533,6 +533,21 @@ def test_noisy_hexagon_nut(seed):
 
 
 @needs_freecad
+def test_a_designed_half_angle_between_ideal_ones_stays():
+    """A scanned turned part with a 25° taper: a cone's half-angle snaps to an ideal angle (here
+    30°, within the 5° tolerance) only where the ideal cone fits its points about as well as the
+    fitted one; the taper's wide band fixes its 25°."""
+    FreeCAD, Part, _ = shapes.freecad()
+    V3 = FreeCAD.Vector
+    taper = Part.makeCone(10, 10 - 10 * np.tan(np.radians(25)), 10, V3(0, 0, 10))
+    part = Part.makeCylinder(10, 10).fuse(taper).removeSplitter()
+    V, F, _, diag = shapes.uniform_remesh(part, 30000)
+    layer = idealize.idealize(idealize.Mesh(shapes.normal_noise(V, F, diag, 1), F))
+    [cone] = [f for f in layer.features if f["type"] == "cone"]
+    assert abs(np.degrees(cone["params"]["half_angle"]) - 25) < 0.5
+
+
+@needs_freecad
 def test_deterministic(noisy_scan):
     V, F, _, _, first = noisy_scan
     second = idealize.idealize(idealize.Mesh(V.copy(), F.copy()))

@@ -528,6 +528,96 @@ Vec3 corner_point(const std::vector<LocalSurface>& surfaces, const Vec3& x0, dou
   return x;
 }
 
+// Where a line meets a surface near the parameter range [low, high]: its crossings, or, where it
+// crosses nowhere there but passes within `tol`, the point where it touches (comes nearest).
+std::vector<double> line_meets(const std::function<double(double)>& distance, double low, double high, double tol) {
+  constexpr int kSamples = 256;
+  std::vector<double> roots;
+  double nearest = low, nearest_distance = std::abs(distance(low));
+  double t_prev = low, d_prev = distance(low);
+  for (int i = 1; i <= kSamples; ++i) {
+    const double t = low + (high - low) * i / kSamples, d = distance(t);
+    if (std::abs(d) < nearest_distance) nearest = t, nearest_distance = std::abs(d);
+    if ((d_prev < 0.0) != (d < 0.0)) {
+      double lo = t_prev, hi = t;  // bisection: distance(lo) has d_prev's sign
+      for (int k = 0; k < 60; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        ((distance(mid) < 0.0) == (d_prev < 0.0) ? lo : hi) = mid;
+      }
+      roots.push_back(0.5 * (lo + hi));
+    }
+    t_prev = t;
+    d_prev = d;
+  }
+  if (!roots.empty()) return roots;
+  double lo = nearest - (high - low) / kSamples, hi = nearest + (high - low) / kSamples;
+  for (int k = 0; k < 60; ++k) {  // golden-section search for the nearest point
+    const double m1 = hi - 0.618 * (hi - lo), m2 = lo + 0.618 * (hi - lo);
+    if (std::abs(distance(m1)) < std::abs(distance(m2))) hi = m2;
+    else lo = m1;
+  }
+  const double t = 0.5 * (lo + hi);
+  if (std::abs(distance(t)) <= tol) return {t};
+  return {};
+}
+
+// The corners at both ends of a straight chain between two planes, each where the planes' line
+// meets the third surface at that corner: the points nearest to the mesh's corners that keep the
+// chain's order and have no crossing of either surface between them (the chain's edge runs on
+// the planes alone; a crossing within `tol` of an end counts as that end's, as two pieces of one
+// cone may cross it a little apart), a touching point standing for a crossing. A flat of a hexagon meets the
+// chamfer cone round its corners at a shallow angle: its line crosses the chamfer's circle twice,
+// close together, or touches it (a bolt's chamfer to the width across the flats); each corner
+// alone, fitted from the mesh's rounded corner, may take either crossing, or its own point of a
+// line that misses by less than the noise, and the face folds back. Null where no such pair is
+// found.
+std::optional<std::pair<Vec3, Vec3>> line_chain_ends(const Surface& a, const Surface& b,
+                                                     const std::array<const Surface*, 2>& third,
+                                                     const std::array<Vec3, 2>& mesh_corners,
+                                                     const std::array<Vec3, 2>& fitted, double tol) {
+  const Vec3 cross = a.axis.cross(b.axis);
+  if (cross.norm() < kNearlyParallel) return std::nullopt;
+  const Vec3 dir = cross.normalized();
+  // The point of both planes nearest to the chain's middle.
+  const Vec3 middle = 0.5 * (mesh_corners[0] + mesh_corners[1]);
+  Eigen::Matrix2d m;
+  m << 1.0, a.axis.dot(b.axis), a.axis.dot(b.axis), 1.0;
+  const Eigen::Vector2d lambda = m.ldlt().solve(Eigen::Vector2d(a.axis.dot(a.point - middle), b.axis.dot(b.point - middle)));
+  const Vec3 origin = middle + lambda[0] * a.axis + lambda[1] * b.axis;
+  const auto at = [&](double t) { return Vec3(origin + t * dir); };
+  // Where to look: about the mesh's and the fitted corners, a chain's length beyond them.
+  const std::array<double, 2> t_mesh = {(mesh_corners[0] - origin).dot(dir), (mesh_corners[1] - origin).dot(dir)};
+  double low = std::min(t_mesh[0], t_mesh[1]), high = std::max(t_mesh[0], t_mesh[1]);
+  for (const Vec3& p : fitted) {
+    low = std::min(low, (p - origin).dot(dir));
+    high = std::max(high, (p - origin).dot(dir));
+  }
+  const double reach = std::max(std::abs(t_mesh[1] - t_mesh[0]), tol);
+  low -= reach;
+  high += reach;
+  std::array<std::vector<double>, 2> meets;
+  for (int end = 0; end < 2; ++end)
+    meets[end] = line_meets([&](double t) { return signed_distance(*third[end], at(t)); }, low, high, tol);
+  const double sense = t_mesh[1] >= t_mesh[0] ? 1.0 : -1.0;
+  auto crossed_between = [&](double x, double y) {  // (a crossing within tol of an end is that end's)
+    for (const auto& ts : meets)
+      for (double t : ts)
+        if (t > std::min(x, y) + tol && t < std::max(x, y) - tol) return true;
+    return false;
+  };
+  std::optional<std::pair<double, double>> best;
+  double best_cost = 0.0;
+  for (double p : meets[0])
+    for (double q : meets[1]) {
+      // One point for both only where one surface touches the line there.
+      if (sense * (q - p) < 0.0 || (q == p && (third[0] != third[1] || meets[0].size() != 1)) || crossed_between(p, q)) continue;
+      const double cost = std::abs(p - t_mesh[0]) + std::abs(q - t_mesh[1]);
+      if (!best || cost < best_cost) best = std::make_pair(p, q), best_cost = cost;
+    }
+  if (!best) return std::nullopt;
+  return std::make_pair(at(best->first), at(best->second));
+}
+
 // What fixes a corner: the surfaces that meet there, except that a cylinder tangent to a sphere (a
 // fillet running into the ball where fillets meet, thesis 4.3 case 2) touches it along the circle in
 // the plane through the centre normal to the axis, and that plane stands in for it. Tangent surfaces
@@ -936,6 +1026,7 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
     if (chain.vertices.back() != chain.vertices.front()) chains_at[chain.vertices.back()].push_back(static_cast<int>(c));
   }
   std::map<int, Handle(Geom_Curve)> contact_of;  // chain -> the curve its two surfaces touch along, or null
+  std::map<int, std::vector<int>> plain_corners;  // corner -> its features, where their own surfaces fix it
   for (int v : topo_.corners) {
     std::vector<const Surface*> around;
     std::vector<int> around_features, freeform;
@@ -987,6 +1078,34 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
     for (const Surface& c : constraints) meeting.push_back([c](const Vec3&) { return c; });
     for (int feature : freeform) meeting.push_back(local_surface(feature));
     corner_points_[v] = meeting.empty() ? x0 : corner_point(meeting, x0, tol_);
+    if (freeform.empty() && std::count(replaced.begin(), replaced.end(), 1) == 0) {
+      std::sort(around_features.begin(), around_features.end());
+      plain_corners[v] = around_features;
+    }
+  }
+  // A straight chain between two planes whose corners each a third, round surface fixes: both
+  // corners together (line_chain_ends).
+  for (const BoundaryChain& chain : topo_.chains) {
+    const int front = chain.vertices.front(), back = chain.vertices.back();
+    if (chain.closed || chain.right < 0 || front == back) continue;
+    const auto f = plain_corners.find(front), b = plain_corners.find(back);
+    if (f == plain_corners.end() || b == plain_corners.end() || f->second.size() != 3 || b->second.size() != 3) continue;
+    const int left = topo_.region_feature[chain.left], right = topo_.region_feature[chain.right];
+    const Surface &a = surfaces_[left], &c = surfaces_[right];
+    if (a.type != SurfaceType::Plane || c.type != SurfaceType::Plane) continue;
+    const auto third = [&](const std::vector<int>& features) {  // the one besides the chain's two
+      const bool both = std::count(features.begin(), features.end(), left) && std::count(features.begin(), features.end(), right);
+      for (int f : features)
+        if (both && f != left && f != right) return &surfaces_[f];
+      return static_cast<const Surface*>(nullptr);
+    };
+    const std::array<const Surface*, 2> thirds = {third(f->second), third(b->second)};
+    if (!thirds[0] || !thirds[1] || thirds[0]->type == SurfaceType::Plane || thirds[1]->type == SurfaceType::Plane) continue;
+    const auto ends = line_chain_ends(a, c, thirds, {mesh_.V.row(front).transpose(), mesh_.V.row(back).transpose()},
+                                      {corner_points_[front], corner_points_[back]}, tol_);
+    if (!ends) continue;
+    corner_points_[front] = ends->first;
+    corner_points_[back] = ends->second;
   }
   // Corners that the surfaces put at one point (four features meeting where the mesh shows two
   // corners joined by a short chain) are one vertex, and the chain between them no edge.

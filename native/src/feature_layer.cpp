@@ -2005,7 +2005,10 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     // the ideal axes, the scans' median radius error grew from 0.38 % to 0.53 %).
     const std::vector<PatchPoints> whole =
         exact_mesh ? patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), -1) : std::vector<PatchPoints>();
-    if (exact_mesh) ideal.points = &whole;
+    points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
+    ideal.points = exact_mesh ? &whole : &points;
+    ideal.refit_moved_profiles = exact_mesh;
+    ideal.residual_ratio = options.residual_ratio;
     if (idealize_features(layer.features, layer.relations, ideal) > 0) {
       // An ideal surface must still describe its patch: where it fits clearly worse than the fitted
       // one (a direction that only looked ideal, radii that only looked equal), the fit stays. A
@@ -2015,7 +2018,6 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       // not independent noise), the more of the distance tolerance the ideal one may deviate by in
       // addition. (Measured on the benchmark's sculpted parts: 11 -> 12 of 23 solids with the true
       // surface types, and the scans' and CAD exports' solids unchanged.)
-      points = patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()));
       const double ideal_slack =
           exact_mesh ? 0.0 : (1.0 - independent_share(mesh, fitted, layer.labels)) * layer.distance_tolerance;
       auto misfit = [&](size_t p, const Surface& surface) {

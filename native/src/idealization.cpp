@@ -71,9 +71,11 @@ bool part_frame(const std::vector<Feature>& features, const std::vector<char>& u
   return true;
 }
 
-// Directions in the coordinate planes of the frame at the thesis's ideal angles from its axes.
+// The thesis's ideal angles from the frame's axes, and their supplements.
+constexpr std::array<double, 12> kDegrees = {0, 10, 30, 45, 60, 80, 90, 100, 120, 135, 150, 170};
+
+// Directions in the coordinate planes of the frame at the ideal angles from its axes.
 std::vector<Eigen::Vector3d> ideal_directions(const Frame& frame) {
-  constexpr std::array<double, 12> kDegrees = {0, 10, 30, 45, 60, 80, 90, 100, 120, 135, 150, 170};
   const std::array<std::pair<Eigen::Vector3d, Eigen::Vector3d>, 3> planes = {
       std::make_pair(frame.x, frame.y), std::make_pair(frame.y, frame.z), std::make_pair(frame.z, frame.x)};
   std::vector<Eigen::Vector3d> out;
@@ -116,6 +118,89 @@ std::vector<const Surface*> tangent_surfaces(int id, SurfaceType type, const std
   return out;
 }
 
+// A cone's generator is a direction too: a cone about one of the part's ideal directions whose
+// half-angle is within the angle tolerance of an ideal angle takes it, and the apex moves so that
+// the profile line passes through the weighted mean of the points' heights and distances (the
+// least-squares apex for that angle).
+void snap_half_angle(Surface& cone, const FitData& data, const std::vector<Eigen::Vector3d>& ideals,
+                     double angle_tolerance, double residual_ratio) {
+  if (std::none_of(ideals.begin(), ideals.end(), [&](const Eigen::Vector3d& d) { return std::abs(d.dot(cone.axis)) > 1.0 - 1e-12; }))
+    return;
+  const double* ideal = nullptr;
+  for (const double& degrees : kDegrees)
+    if (degrees > 0.0 && degrees < 90.0 && std::abs(degrees * M_PI / 180.0 - cone.half_angle) <= angle_tolerance) ideal = &degrees;
+  const double total = data.weights.sum();
+  if (!ideal || !(total > 0.0)) return;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();  // height along the axis from the apex, distance from it
+  for (Eigen::Index i = 0; i < data.points.rows(); ++i) {
+    const AxialCoordinates c = axial_coordinates(cone.point, cone.axis, data.points.row(i).transpose());
+    mean += data.weights[i] * Eigen::Vector2d(c.height, c.distance);
+  }
+  mean /= total;
+  Surface snapped = cone;
+  snapped.half_angle = *ideal * M_PI / 180.0;
+  snapped.point += (mean.x() - mean.y() / std::tan(snapped.half_angle)) * snapped.axis;
+  double rms, snapped_rms, max_error;
+  fit_residuals(cone, data.points, data.weights, rms, max_error);
+  fit_residuals(snapped, data.points, data.weights, snapped_rms, max_error);
+  if (snapped_rms <= residual_ratio * rms) cone = snapped;
+}
+
+// 4b. Pieces of one cone: the coaxial cones that open the same way and whose union one cone
+// about their axis fits about as well as each piece its own (RMS within the residual ratio times
+// its own, plus the spread of its few points) take that cone, its half-angle snapped. A chamfer round a hexagon's corners comes
+// as six pieces of a narrow band, each too short in profile to fix its half-angle (a bolt's 60°
+// chamfer fitted 58-68°), whose circles then missed the flats they touch.
+void one_cone_per_surface(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
+                          const std::vector<FitData>& points, const std::vector<Eigen::Vector3d>& ideals,
+                          double angle_tolerance, double residual_ratio) {
+  std::vector<std::vector<int>> groups;  // the cones of each coaxial group, then each other cone alone
+  std::vector<char> grouped(features.size(), 0), taken(features.size(), 0);
+  for (const FeatureRelation& r : relations)
+    if (r.kind == "coaxial") {
+      groups.emplace_back(r.features);
+      for (int m : r.features) grouped[m] = 1;
+    }
+  for (const Feature& f : features)
+    if (!grouped[f.id]) groups.push_back({f.id});
+  for (const std::vector<int>& group : groups) {
+    std::vector<int> cones;
+    for (int m : group)
+      if (features[m].type == SurfaceType::Cone && static_cast<size_t>(m) < points.size() && points[m].points.rows() > 0)
+        cones.push_back(m);
+    std::sort(cones.begin(), cones.end(), [&](int x, int y) { return features[x].area > features[y].area; });
+    for (int seed : cones) {
+      if (taken[seed]) continue;
+      std::vector<int> members = {seed};
+      FitData data = points[seed];
+      Surface joint = features[seed].surface;
+      for (int m : cones) {
+        if (m == seed || taken[m] || features[m].surface.axis.dot(joint.axis) <= 0.0) continue;
+        const FitData both = concatenate(data, points[m]);
+        const SurfaceFit fit = fit_about_axis(SurfaceType::Cone, both, joint.point, joint.axis);
+        if (!fit.valid || fit.surface.axis.dot(joint.axis) <= 0.0) continue;
+        bool explains = true;
+        for (int n : members) {
+          double rms, max_error;
+          fit_residuals(fit.surface, points[n].points, points[n].weights, rms, max_error);
+          explains &= rms <= residual_ratio * features[n].rms + features[n].spread;
+        }
+        double rms, max_error;
+        fit_residuals(fit.surface, points[m].points, points[m].weights, rms, max_error);
+        if (!explains || rms > residual_ratio * features[m].rms + features[m].spread) continue;
+        members.push_back(m);
+        data = both;
+        joint = fit.surface;
+      }
+      snap_half_angle(joint, data, ideals, angle_tolerance, residual_ratio);
+      for (int m : members) {
+        taken[m] = 1;
+        features[m].surface = joint;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 int idealize_features(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
@@ -139,8 +224,9 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       for (int m : group) features[m].surface.axis = aligned(d, features[m].surface.axis);
     }
   Frame frame;
+  std::vector<Eigen::Vector3d> ideals;
   if (options.snap_to_frame && part_frame(features, unsnapped, std::sin(angle), frame)) {
-    const std::vector<Eigen::Vector3d> ideals = ideal_directions(frame);
+    ideals = ideal_directions(frame);
     for (Feature& f : features)
       if (analytic(f) && f.surface.has_direction() && !unsnapped[f.id])
         f.surface.axis = snapped(f.surface.axis, ideals, cos_tolerance);
@@ -181,7 +267,7 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
 
   // 4. Profiles: a cylinder or cone whose axis moved is fitted again about its ideal axis (the
   // radius of a cylinder, apex and half-angle of a cone), where that fits its points.
-  if (options.points)
+  if (options.points && options.refit_moved_profiles)
     for (Feature& f : features) {
       const Surface& was = before[f.id].surface;
       if ((f.type != SurfaceType::Cylinder && f.type != SurfaceType::Cone) ||
@@ -192,6 +278,8 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       const SurfaceFit profile = fit_about_axis(f.type, data, f.surface.point, f.surface.axis);
       if (profile.valid && profile.surface.axis.dot(f.surface.axis) > 0.0) f.surface = profile.surface;
     }
+
+  if (options.points) one_cone_per_surface(features, relations, *options.points, ideals, angle, options.residual_ratio);
 
   for (const FeatureRelation& r : relations) {
     const std::vector<int>& group = r.features;

@@ -6,7 +6,9 @@
 // The frame: the normal of the largest plane is Z; the largest feature whose direction is
 // orthogonal to it (within the angle tolerance) gives X. A direction within the angle tolerance of
 // a direction in a coordinate plane of that frame at 0, 10, 30, 45, 60 or 90 degrees (and their
-// supplements) from a frame axis snaps to it. Cylinders tangent to planes parallel to their axis
+// supplements) from a frame axis snaps to it; so does a cone's half-angle, about such a direction,
+// where the ideal cone fits its points about as well, and coaxial cones that one cone fits (the
+// corner pieces of a chamfered hexagon) take it. Cylinders tangent to planes parallel to their axis
 // move to touch them (keeping their radius), and so do tori tangent to a plane across their axis
 // or a coaxial cylinder (keeping their tube radius). No constraint solver: groups are made consistent one
 // relation kind at a time, in the order a designer fixes them (directions, then positions, then
@@ -29,6 +31,11 @@ struct IdealizationOptions {
   // the ideal axis (the thesis's semi-defined features, 4.3: a narrow chamfer cone's fitted
   // half-angle is off by as much as its tilt allows).
   const std::vector<FitData>* points = nullptr;
+  // Whether the profiles of cylinders and cones whose axis moved are fitted again (with `points`).
+  bool refit_moved_profiles = true;
+  // With `points`: an ideal cone (pieces joined, half-angle snapped) may fit its points by this
+  // factor worse (RMS) than the fitted one.
+  double residual_ratio = 1.5;
 };
 
 // Idealizes `features` in place using `relations` (from build_feature_graph). Freeform features
