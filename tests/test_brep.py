@@ -675,6 +675,28 @@ def test_scanned_hexagon_nut_chamfered_to_its_flats_gives_its_solid(seed):
 
 
 @needs_freecad
+@shapes.needs_shared_data
+def test_rounds_beside_faces_at_a_non_ideal_angle_keep_the_parts_direction():
+    """The benchmark's scan of as_isolated_blends_test_15: a plate whose ends meet its sides at 88°,
+    its corners rounded. Snapping turned the ends by 2° onto the part's frame, where they misfit and
+    were kept as fitted, but the rounds, placed to touch the turned ends, misfit too and kept their
+    own fitted axes, 0.2-1.3° off the plate's normal: the solid bridged gaps of 5 distance
+    tolerances. The ends now keep their fitted directions while the rest is idealized about them:
+    the rounds' axes are the plate's normal, and the solid's faces meet."""
+    m = shapes.benchmark_mesh("as_isolated_blends_test_15.stp", "scan")
+    truth = shapes.benchmark_truth("as_isolated_blends_test_15.stp")
+    layer = idealize.idealize(Mesh(m.V, m.F))
+    plate = max((f for f in layer.features if f["type"] == "plane"), key=lambda f: f["area"])
+    for f in layer.features:
+        if f["type"] == "cylinder":
+            assert abs(np.dot(f["params"]["axis"], plate["params"]["normal"])) > np.cos(np.radians(0.05))
+    solid = idealize.make_solid(layer)
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.surface_types == truth["surface_types"]
+    assert solid.max_tolerance <= layer.distance_tolerance
+
+
+@needs_freecad
 def test_noisy_coarse_cad_export_keeps_its_rounds():
     """A rounded plate with a hole, tessellated coarsely as a CAD exporter does (sides of 20 in
     slivers 0.4 wide) and with noise: its corner radii (5) and hole (8) are below two median edge

@@ -2074,6 +2074,18 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         layer.features = fitted;
         idealize_features(layer.features, layer.relations, ideal);
       }
+      // On a noisy mesh, planes whose turned direction misfits keep their fitted one, and the rest
+      // is idealized once more about them: the features defined by them (a cylinder that touches a plane) were
+      // placed against the turned plane, and misfit too. (A part whose faces meet at 88° has its
+      // rounds' axes made parallel again, instead of all of them staying as fitted.)
+      const size_t held = ideal.unsnapped.size();
+      for (size_t p = 0; p < layer.features.size() && !exact_mesh; ++p)
+        if (layer.features[p].type == SurfaceType::Plane && turn(p) > 0.0 && misfit(p, layer.features[p].surface))
+          ideal.unsnapped.push_back(static_cast<int>(p));
+      if (ideal.unsnapped.size() > held) {
+        layer.features = fitted;
+        idealize_features(layer.features, layer.relations, ideal);
+      }
       for (size_t p = 0; p < layer.features.size(); ++p)
         if (layer.features[p].type != SurfaceType::Freeform && misfit(p, layer.features[p].surface)) layer.features[p] = fitted[p];
       build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
