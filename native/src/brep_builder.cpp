@@ -565,12 +565,12 @@ std::vector<double> line_meets(const std::function<double(double)>& distance, do
 // meets the third surface at that corner: the points nearest to the mesh's corners that keep the
 // chain's order and have no crossing of either surface between them (the chain's edge runs on
 // the planes alone; a crossing within `tol` of an end counts as that end's, as two pieces of one
-// cone may cross it a little apart), a touching point standing for a crossing. A flat of a hexagon meets the
-// chamfer cone round its corners at a shallow angle: its line crosses the chamfer's circle twice,
-// close together, or touches it (a bolt's chamfer to the width across the flats); each corner
-// alone, fitted from the mesh's rounded corner, may take either crossing, or its own point of a
-// line that misses by less than the noise, and the face folds back. Null where no such pair is
-// found.
+// cone may cross it a little apart), a touching point standing for a crossing. A flat of a
+// hexagon meets the chamfer cone round its corners at a shallow angle: its line crosses the
+// chamfer's circle twice, close together, or touches it (a bolt's chamfer to the width across the
+// flats); each corner alone, fitted from the mesh's rounded corner, may take either crossing, or
+// its own point of a line that misses by less than the noise, and the face folds back. Null where
+// no such pair is found.
 std::optional<std::pair<Vec3, Vec3>> line_chain_ends(const Surface& a, const Surface& b,
                                                      const std::array<const Surface*, 2>& third,
                                                      const std::array<Vec3, 2>& mesh_corners,

@@ -2023,12 +2023,16 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
       // surface types, and the scans' and CAD exports' solids unchanged.)
       const double share = exact_mesh ? 1.0 : independent_share(mesh, fitted, layer.labels);
       const double ideal_slack = (1.0 - share) * layer.distance_tolerance;
-      auto misfit = [&](size_t p, const Surface& surface) {
+      auto rms_of = [&](size_t p, const Surface& surface) {
         double rms, max_error;
         fit_residuals(surface, points[p].points, points[p].weights, rms, max_error);
+        return rms;
+      };
+      auto misfits = [&](size_t p, double rms) {
         // (The fit's spread: one σ of noise more; then the slack for correlated residuals.)
         return rms > options.residual_ratio * fitted[p].rms + fitted[p].spread + floor + ideal_slack;
       };
+      auto misfit = [&](size_t p, const Surface& surface) { return misfits(p, rms_of(p, surface)); };
       // A direction that snapped to one of the part's ideal ones only by the angle tolerance (a face
       // designed at 25° snaps to 30°) moves the features tangent to it too: once more, with the
       // directions that alone (the fitted surface turned about its point nearest the patch's
@@ -2062,22 +2066,21 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
         // cannot explain: as much as the share of correlated residuals lets the whole face tilt,
         // and what its independent noise leaves of the fit's parameters. (A scanned face designed
         // at 11.6° fitted 11.5° about as well as 10° fits it by misfit's measure.)
-        double rms, max_error;
-        fit_residuals(turned, points[p].points, points[p].weights, rms, max_error);
+        const double rms = rms_of(p, turned);
         const double excess = std::sqrt(std::max(0.0, rms * rms - fitted[p].rms * fitted[p].rms));
         const double sigma = fitted[p].spread, n = static_cast<double>(points[p].points.rows());
         const bool unexplained =
             excess > 3.0 * sigma * (std::sqrt(1.0 - share) + std::sqrt(3.0 / std::max(n, 1.0))) + ideal_slack;
-        if (misfit(p, turned) || unexplained) ideal.unsnapped.push_back(static_cast<int>(p));
+        if (misfits(p, rms) || unexplained) ideal.unsnapped.push_back(static_cast<int>(p));
       }
       if (!ideal.unsnapped.empty()) {
         layer.features = fitted;
         idealize_features(layer.features, layer.relations, ideal);
       }
       // On a noisy mesh, planes whose turned direction misfits keep their fitted one, and the rest
-      // is idealized once more about them: the features defined by them (a cylinder that touches a plane) were
-      // placed against the turned plane, and misfit too. (A part whose faces meet at 88° has its
-      // rounds' axes made parallel again, instead of all of them staying as fitted.)
+      // is idealized once more about them: the features they define (a cylinder that touches a
+      // plane) were placed against the turned plane, and misfit too. (A part whose faces meet at
+      // 88° has its rounds' axes made parallel again, instead of all of them staying as fitted.)
       const size_t held = ideal.unsnapped.size();
       for (size_t p = 0; p < layer.features.size() && !exact_mesh; ++p)
         if (layer.features[p].type == SurfaceType::Plane && turn(p) > 0.0 && misfit(p, layer.features[p].surface))
