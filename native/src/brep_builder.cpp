@@ -330,6 +330,14 @@ Vec2 edge_branch(const std::vector<Vec2>& hits, const std::vector<Vec2>& contact
 constexpr double kNearlyParallel = 0.0872;
 constexpr int kToleranceSamples = 64;  // points of a fitted edge measured against its two surfaces
 
+// The point of both planes `a` and `b` nearest to `near` (their normals not parallel).
+Vec3 point_on_both_planes(const Surface& a, const Surface& b, const Vec3& near) {
+  Eigen::Matrix2d m;
+  m << a.axis.dot(a.axis), a.axis.dot(b.axis), b.axis.dot(a.axis), b.axis.dot(b.axis);
+  const Vec2 ab = m.ldlt().solve(Vec2(a.axis.dot(a.point - near), b.axis.dot(b.point - near)));
+  return near + ab.x() * a.axis + ab.y() * b.axis;
+}
+
 // The intersection curve of `a` and `b` in closed form, or null; `ends`: the corner points of an
 // open chain (none for a closed one), which choose the branch (edge_branch).
 Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const std::vector<Vec3>& points,
@@ -337,15 +345,11 @@ Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const s
   if (a.type == SurfaceType::Plane && b.type == SurfaceType::Plane) {
     const Vec3 dir = a.axis.cross(b.axis);
     if (dir.norm() < angle_eps) return nullptr;
-    // The point of both planes nearest to the chain's centre.
+    // Through the point of both planes nearest to the chain's centre.
     Vec3 centre = Vec3::Zero();
     for (const Vec3& p : points) centre += p;
     centre /= static_cast<double>(points.size());
-    Eigen::Matrix2d m;
-    m << a.axis.dot(a.axis), a.axis.dot(b.axis), b.axis.dot(a.axis), b.axis.dot(b.axis);
-    const Vec2 rhs(a.axis.dot(a.point - centre), b.axis.dot(b.point - centre));
-    const Vec2 ab = m.ldlt().solve(rhs);
-    return new Geom_Line(to_pnt(centre + ab.x() * a.axis + ab.y() * b.axis), to_dir(dir));
+    return new Geom_Line(to_pnt(point_on_both_planes(a, b, centre)), to_dir(dir));
   }
   Vec3 o, axis;
   if (common_axis(a, b, o, axis)) {
@@ -578,12 +582,7 @@ std::optional<std::pair<Vec3, Vec3>> line_chain_ends(const Surface& a, const Sur
   const Vec3 cross = a.axis.cross(b.axis);
   if (cross.norm() < kNearlyParallel) return std::nullopt;
   const Vec3 dir = cross.normalized();
-  // The point of both planes nearest to the chain's middle.
-  const Vec3 middle = 0.5 * (mesh_corners[0] + mesh_corners[1]);
-  Eigen::Matrix2d m;
-  m << 1.0, a.axis.dot(b.axis), a.axis.dot(b.axis), 1.0;
-  const Eigen::Vector2d lambda = m.ldlt().solve(Eigen::Vector2d(a.axis.dot(a.point - middle), b.axis.dot(b.point - middle)));
-  const Vec3 origin = middle + lambda[0] * a.axis + lambda[1] * b.axis;
+  const Vec3 origin = point_on_both_planes(a, b, 0.5 * (mesh_corners[0] + mesh_corners[1]));
   const auto at = [&](double t) { return Vec3(origin + t * dir); };
   // Where to look: about the mesh's and the fitted corners, a chain's length beyond them.
   const std::array<double, 2> t_mesh = {(mesh_corners[0] - origin).dot(dir), (mesh_corners[1] - origin).dot(dir)};

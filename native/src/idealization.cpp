@@ -148,9 +148,10 @@ void snap_half_angle(Surface& cone, const FitData& data, const std::vector<Eigen
 
 // 4b. Pieces of one cone: the coaxial cones that open the same way and whose union one cone
 // about their axis fits about as well as each piece its own (RMS within the residual ratio times
-// its own, plus the spread of its few points) take that cone, its half-angle snapped. A chamfer round a hexagon's corners comes
-// as six pieces of a narrow band, each too short in profile to fix its half-angle (a bolt's 60°
-// chamfer fitted 58-68°), whose circles then missed the flats they touch.
+// its own, plus the spread of its few points) take that cone, its half-angle snapped. A chamfer
+// round a hexagon's corners comes as six pieces of a narrow band, each too short in profile to fix
+// its half-angle (a bolt's 60° chamfer fitted 58-68°), whose circles then missed the flats they
+// touch.
 void one_cone_per_surface(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
                           const std::vector<FitData>& points, const std::vector<Eigen::Vector3d>& ideals,
                           double angle_tolerance, double residual_ratio) {
@@ -179,15 +180,12 @@ void one_cone_per_surface(std::vector<Feature>& features, const std::vector<Feat
         const FitData both = concatenate(data, points[m]);
         const SurfaceFit fit = fit_about_axis(SurfaceType::Cone, both, joint.point, joint.axis);
         if (!fit.valid || fit.surface.axis.dot(joint.axis) <= 0.0) continue;
-        bool explains = true;
-        for (int n : members) {
+        const auto explains = [&](int n) {
           double rms, max_error;
           fit_residuals(fit.surface, points[n].points, points[n].weights, rms, max_error);
-          explains &= rms <= residual_ratio * features[n].rms + features[n].spread;
-        }
-        double rms, max_error;
-        fit_residuals(fit.surface, points[m].points, points[m].weights, rms, max_error);
-        if (!explains || rms > residual_ratio * features[m].rms + features[m].spread) continue;
+          return rms <= residual_ratio * features[n].rms + features[n].spread;
+        };
+        if (!explains(m) || !std::all_of(members.begin(), members.end(), explains)) continue;
         members.push_back(m);
         data = both;
         joint = fit.surface;
