@@ -476,6 +476,40 @@ Handle(Geom_Curve) fitted_curve(const std::vector<Vec3>& points, double tol) {
   return Handle(Geom_Curve)(fit.Curve());
 }
 
+// The curve fitted to a chain's points, from the corners `start` and `end` where they are given: the
+// chain's own end vertices lie off the corners (by the width of the mesh's chamfer), and an edge
+// that stopped there would leave gaps for its vertices' tolerance to bridge (a screw's slot walls
+// met its domed head 0.3 mm from their corners). Points beyond a given corner along the curve are
+// left out.
+Handle(Geom_Curve) fitted_between(const std::vector<Vec3>& points, const Vec3* start, const Vec3* end, double tol,
+                                  const std::function<double(const Vec3&)>& off) {
+  const Handle(Geom_Curve) first = fitted_curve(points, tol);
+  if (first.IsNull() || (!start && !end)) return first;
+  // Parameters measured the way the chain runs.
+  const double sense = curve_parameter(first, points.front()) <= curve_parameter(first, points.back()) ? 1.0 : -1.0;
+  const auto along = [&](const Vec3& p) { return sense * curve_parameter(first, p); };
+  const double from = start ? along(*start) : -std::numeric_limits<double>::infinity();
+  const double to = end ? along(*end) : std::numeric_limits<double>::infinity();
+  std::vector<Vec3> kept;
+  if (start) kept.push_back(*start);
+  for (const Vec3& p : points) {
+    const double u = along(p);
+    const bool at_corner = (start && (p - *start).norm() <= 0.1 * tol) || (end && (p - *end).norm() <= 0.1 * tol);
+    if (u > from && u < to && !at_corner) kept.push_back(p);
+  }
+  if (end) kept.push_back(*end);
+  // Only where the curve through them stays on both surfaces (`off` of a point: its distance from the
+  // farther one): a corner may lie on another branch of their intersection.
+  const Handle(Geom_Curve) pinned = fitted_curve(kept, tol);
+  if (pinned.IsNull()) return first;
+  constexpr int kSamples = 32;
+  for (int i = 0; i <= kSamples; ++i) {
+    const double u = pinned->FirstParameter() + (pinned->LastParameter() - pinned->FirstParameter()) * i / kSamples;
+    if (off(to_vec(pinned->Value(u))) > tol) return first;
+  }
+  return pinned;
+}
+
 // A feature's surface near a point: the analytic surface itself, or for a freeform feature the
 // tangent plane of its B-spline at the point's nearest point (so that closest_point, signed_distance
 // and surface_normal near that point are those of the B-spline).
@@ -1201,7 +1235,14 @@ BrepBuilder::ChainCurve BrepBuilder::chain_curve(size_t c) const {
       }
     }
     if (curve.IsNull()) {
-      curve = fitted_curve(points, tol_);
+      // Through the corners that lie on both surfaces (points of the curve they meet on).
+      const auto off = [&](const Vec3& p) {
+        return std::max(std::abs(signed_distance(local_a(p), p)), b ? std::abs(signed_distance(local_b(p), p)) : 0.0);
+      };
+      const auto on_both = [&](const Vec3& corner) { return b && off(corner) <= tol_; };
+      curve = chain.closed ? fitted_curve(points, tol_)
+                           : fitted_between(points, on_both(ends[0]) ? &ends[0] : nullptr,
+                                            on_both(ends[1]) ? &ends[1] : nullptr, tol_, off);
       report.curve = "fitted";
     }
     if (curve.IsNull()) {
