@@ -366,7 +366,14 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
 
   // 9. A torus tangent to a plane across its axis and to a coaxial cylinder (the fillet at the foot
   // of a boss or the rim of a bore) keeps its tube radius and touches both: its centre lies the tube
-  // radius from the plane, its circle the tube radius from the cylinder.
+  // radius from the plane, its circle the tube radius from the cylinder, about the cylinder's axis
+  // (coaxial with it, or within the distance tolerance of it).
+  auto coaxial = [&](int id, const Surface& surface) {
+    return std::any_of(relations.begin(), relations.end(), [&](const FeatureRelation& r) {
+      return r.kind == "coaxial" && std::find(r.features.begin(), r.features.end(), id) != r.features.end() &&
+             std::any_of(r.features.begin(), r.features.end(), [&](int m) { return &features[m].surface == &surface; });
+    });
+  };
   for (Feature& torus : features) {
     if (torus.type != SurfaceType::Torus) continue;
     Surface& t = torus.surface;
@@ -376,9 +383,13 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       break;
     }
     for (const Surface* cylinder : tangent_surfaces(torus.id, SurfaceType::Cylinder, relations, features)) {
+      const AxialCoordinates centre = axial_coordinates(cylinder->point, cylinder->axis, t.point);
       if (std::abs(cylinder->axis.dot(t.axis)) < cos_tolerance ||
-          axial_coordinates(cylinder->point, cylinder->axis, t.point).distance > options.distance_tolerance)
+          (centre.distance > options.distance_tolerance && !coaxial(torus.id, *cylinder)))
         continue;
+      // On the cylinder's axis, which its tangent planes may have moved (step 7).
+      t.axis = aligned(cylinder->axis, t.axis);
+      t.point = cylinder->point + centre.height * cylinder->axis;
       t.radius = t.radius >= cylinder->radius ? cylinder->radius + t.minor : cylinder->radius - t.minor;
       break;
     }

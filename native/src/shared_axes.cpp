@@ -260,53 +260,61 @@ int tori_between_planes_and_cylinders(const std::vector<FitData>& points,
   }
   int changed = 0;
   for (size_t t = 0; t < features.size(); ++t) {
-    const Surface& torus = features[t].surface;
     const FitData& data = points[t];
-    if (features[t].type != SurfaceType::Torus || data.points.rows() < 2 * parameter_count(SurfaceType::Torus)) continue;
-    const Surface *plane = nullptr, *cylinder = nullptr;
-    for (int n : beside[t]) {
-      const Surface& s = features[n].surface;
-      if (std::abs(s.axis.dot(torus.axis)) < std::cos(options.angle_tolerance)) continue;
-      if (features[n].type == SurfaceType::Plane && !plane) plane = &s;
-      if (features[n].type == SurfaceType::Cylinder && !cylinder &&
-          axial_coordinates(s.point, s.axis, torus.point).distance <= options.distance_tolerance)
-        cylinder = &s;
-    }
-    if (!plane || !cylinder) continue;
-    // About the cylinder's axis, on the sides of the plane and of the cylinder the fit put it.
-    const Eigen::Vector3d& o = cylinder->point;
-    const Eigen::Vector3d a = cylinder->axis;
-    const double foot = (plane->point - o).dot(a);
-    const double height = (torus.point - o).dot(a) - foot;
-    const double above = height >= 0.0 ? 1.0 : -1.0;
-    const double outside = torus.radius >= cylinder->radius ? 1.0 : -1.0;
-    // Only a torus that its own fit already puts against both (a torus where fillets meet at a
-    // corner may border a plane and a cylinder about its axis without touching them).
-    const double gap = options.distance_tolerance + 3.0 * features[t].spread;
-    if (std::abs(std::abs(height) - torus.minor) > gap || std::abs(std::abs(torus.radius - cylinder->radius) - torus.minor) > gap)
-      continue;
-    Surface tangent = torus;
-    tangent.axis = a;
-    auto mean_square = [&](double log_r) {
-      tangent.minor = std::exp(log_r);
-      tangent.point = o + (foot + above * tangent.minor) * a;
-      tangent.radius = cylinder->radius + outside * tangent.minor;
-      double rms, max_error;
-      fit_residuals(tangent, data.points, data.weights, rms, max_error);
-      return rms * rms;
-    };
-    // From a hundredth of the fitted tube radius to a hundred times it, inside the cylinder less
-    // than its radius.
-    const double largest = outside > 0.0 ? 1e2 * torus.minor : std::min(1e2 * torus.minor, 0.999 * cylinder->radius);
-    if (!(largest > 1e-2 * torus.minor)) continue;
-    mean_square(least_on_interval(mean_square, std::log(1e-2 * torus.minor), std::log(largest)));
-    SurfaceFit fit = fit_of(tangent, data);
-    measure_spreads(data, fit);
+    const bool retype = features[t].type == SurfaceType::Cylinder || features[t].type == SurfaceType::Cone;
+    if ((!retype && features[t].type != SurfaceType::Torus) || data.points.rows() < 2 * parameter_count(SurfaceType::Torus)) continue;
+    const double total = data.weights.sum();
+    SurfaceFit best;
+    // Every plane and cylinder beside it that meet at a right angle (not the torus's own axis,
+    // which a quarter of a noisy tube tilts by degrees, and its centre with it).
+    for (int c : beside[t])
+      for (int p : beside[t]) {
+        if (features[c].type != SurfaceType::Cylinder || features[p].type != SurfaceType::Plane) continue;
+        const Surface &cylinder = features[c].surface, &plane = features[p].surface;
+        if (std::abs(plane.axis.dot(cylinder.axis)) < std::cos(options.angle_tolerance)) continue;
+        // About the cylinder's axis, on the sides of the plane and of the cylinder the patch lies.
+        const Eigen::Vector3d& o = cylinder.point;
+        const Eigen::Vector3d& a = cylinder.axis;
+        const double foot = (plane.point - o).dot(a);
+        // (The mean distance of the points from the axis: the centroid of a ring lies on it.)
+        double height = 0.0, distance = 0.0;
+        for (Eigen::Index i = 0; i < data.points.rows(); ++i) {
+          const AxialCoordinates at = axial_coordinates(o, a, data.points.row(i).transpose());
+          height += data.weights[i] * at.height / total;
+          distance += data.weights[i] * at.distance / total;
+        }
+        const double above = height >= foot ? 1.0 : -1.0;
+        const double outside = distance >= cylinder.radius ? 1.0 : -1.0;
+        Surface tangent;
+        tangent.type = SurfaceType::Torus;
+        tangent.axis = a;
+        auto mean_square = [&](double log_r) {
+          tangent.minor = std::exp(log_r);
+          tangent.point = o + (foot + above * tangent.minor) * a;
+          tangent.radius = cylinder.radius + outside * tangent.minor;
+          double rms, max_error;
+          fit_residuals(tangent, data.points, data.weights, rms, max_error);
+          return rms * rms;
+        };
+        // From a hundredth of the patch's distance from the plane to a hundred times it, inside the
+        // cylinder less than its radius.
+        const double reach = std::abs(height - foot);
+        const double largest = outside > 0.0 ? 1e2 * reach : std::min(1e2 * reach, 0.999 * cylinder.radius);
+        if (!(largest > 1e-2 * reach)) continue;
+        mean_square(least_on_interval(mean_square, std::log(1e-2 * reach), std::log(largest)));
+        // A spindle torus (its tube crossing the axis) is no blend that a cylinder or cone passed for:
+        // where fillets meet in a corner ball the tube's circle shrinks onto the axis.
+        if (retype && tangent.radius < tangent.minor) continue;
+        const SurfaceFit fit = fit_of(tangent, data);
+        if (!best.valid || fit.rms < best.rms) best = fit;
+      }
+    if (!best.valid) continue;
+    measure_spreads(data, best);
     const Feature& own = features[t];
-    if (fit.spread > options.residual_ratio * own.spread ||
-        fit.normal_spread > options.residual_ratio * own.normal_spread + options.normal_floor)
+    if (best.spread > (retype ? 1.0 : options.residual_ratio) * own.spread ||
+        best.normal_spread > options.residual_ratio * own.normal_spread + options.normal_floor)
       continue;
-    features[t].set_fit(fit);
+    features[t].set_fit(best);
     ++changed;
   }
   return changed;

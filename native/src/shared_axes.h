@@ -55,12 +55,15 @@ int fillets_between_planes(const std::vector<FitData>& points, const std::vector
 // Fillets at the foot of a boss or the rim of a bore: a torus beside a plane across its axis and a
 // coaxial cylinder, both tangent to it, has one free parameter, its tube radius (the centre lies that
 // far from the plane, the tube's circle that far from the cylinder). A narrow fillet's own fit of
-// seven parameters takes its tube radius and place from a few degrees of arc; the tangent torus of
-// least RMS distance replaces it where its own fit already touches both and the tangent one fits
-// about as well (spread within residual_ratio times, without the distance tolerance, which on a
-// sculpted part would let in a torus that the undulation of its neighbours puts off its patch; normal
-// spread as identification requires). `adjacent`: pairs of features sharing a border. Returns the
-// number of features changed.
+// seven parameters takes its tube radius and place from a few degrees of arc, and a quarter of a
+// noisy tube tilts its axis by degrees. Every plane and cylinder beside the feature that meet at a
+// right angle are tried (on the sides of them its points lie); the tangent torus of least RMS
+// distance replaces its own fit where it fits about as well (spread within residual_ratio times,
+// without the distance tolerance, which on a sculpted part would let in a torus that the undulation
+// of its neighbours puts off its patch; normal spread as identification requires). A cylinder or
+// cone (what such a blend passes for) becomes that torus where it fits at least as well, unless it
+// is a spindle torus. `adjacent`: pairs of features sharing a border. Returns the number of features
+// changed.
 int tori_between_planes_and_cylinders(const std::vector<FitData>& points,
                                       const std::vector<std::pair<int, int>>& adjacent, const SharedAxisOptions& options,
                                       std::vector<Feature>& features);
