@@ -159,6 +159,46 @@ SurfaceFit tangent_cylinder(const FitData& data, const Eigen::Vector3d& n1, cons
   return best;
 }
 
+// The torus tangent to the plane (across the cylinder's axis) and to the cylinder, about the
+// cylinder's axis, that fits `data` best, on the sides of both where the points lie: the tube radius
+// is searched over its logarithm, on a grid and then by golden section. Invalid where the points lie
+// in the plane, or (unless `spindle`) where the best is a spindle torus, its tube crossing the axis
+// (where fillets meet in a corner ball the tube's circle shrinks onto the axis).
+SurfaceFit tangent_torus(const FitData& data, const Surface& cylinder, const Surface& plane, bool spindle) {
+  const Eigen::Vector3d& o = cylinder.point;
+  const Eigen::Vector3d& a = cylinder.axis;
+  const double foot = (plane.point - o).dot(a);
+  // (The mean distance of the points from the axis: the centroid of a ring lies on it.)
+  const double total = data.weights.sum();
+  double height = 0.0, distance = 0.0;
+  for (Eigen::Index i = 0; i < data.points.rows(); ++i) {
+    const AxialCoordinates at = axial_coordinates(o, a, data.points.row(i).transpose());
+    height += data.weights[i] * at.height / total;
+    distance += data.weights[i] * at.distance / total;
+  }
+  const double above = height >= foot ? 1.0 : -1.0;
+  const double outside = distance >= cylinder.radius ? 1.0 : -1.0;
+  Surface tangent;
+  tangent.type = SurfaceType::Torus;
+  tangent.axis = a;
+  auto mean_square = [&](double log_r) {
+    tangent.minor = std::exp(log_r);
+    tangent.point = o + (foot + above * tangent.minor) * a;
+    tangent.radius = cylinder.radius + outside * tangent.minor;
+    double rms, max_error;
+    fit_residuals(tangent, data.points, data.weights, rms, max_error);
+    return rms * rms;
+  };
+  // From a hundredth of the points' distance from the plane to a hundred times it, inside the
+  // cylinder less than its radius.
+  const double reach = std::abs(height - foot);
+  const double largest = outside > 0.0 ? 1e2 * reach : std::min(1e2 * reach, 0.999 * cylinder.radius);
+  if (!(largest > 1e-2 * reach)) return SurfaceFit();
+  mean_square(least_on_interval(mean_square, std::log(1e-2 * reach), std::log(largest)));
+  if (!spindle && tangent.radius < tangent.minor) return SurfaceFit();
+  return fit_of(tangent, data);
+}
+
 // The points of a plane's patch that lie on the arc of a cylinder tangent to it, within `reach` of the
 // cylinder: past the line where the cylinder touches the plane (`to_plane`, the unit direction from
 // the axis to it), towards `other` (the same for the other plane the cylinder touches).
@@ -262,51 +302,18 @@ int tori_between_planes_and_cylinders(const std::vector<FitData>& points,
   for (size_t t = 0; t < features.size(); ++t) {
     const FitData& data = points[t];
     const bool retype = features[t].type == SurfaceType::Cylinder || features[t].type == SurfaceType::Cone;
-    if ((!retype && features[t].type != SurfaceType::Torus) || data.points.rows() < 2 * parameter_count(SurfaceType::Torus)) continue;
-    const double total = data.weights.sum();
+    if ((!retype && features[t].type != SurfaceType::Torus) || data.points.rows() < 2 * parameter_count(SurfaceType::Torus))
+      continue;
     SurfaceFit best;
     // Every plane and cylinder beside it that meet at a right angle (not the torus's own axis,
     // which a quarter of a noisy tube tilts by degrees, and its centre with it).
     for (int c : beside[t])
       for (int p : beside[t]) {
-        if (features[c].type != SurfaceType::Cylinder || features[p].type != SurfaceType::Plane) continue;
-        const Surface &cylinder = features[c].surface, &plane = features[p].surface;
-        if (std::abs(plane.axis.dot(cylinder.axis)) < std::cos(options.angle_tolerance)) continue;
-        // About the cylinder's axis, on the sides of the plane and of the cylinder the patch lies.
-        const Eigen::Vector3d& o = cylinder.point;
-        const Eigen::Vector3d& a = cylinder.axis;
-        const double foot = (plane.point - o).dot(a);
-        // (The mean distance of the points from the axis: the centroid of a ring lies on it.)
-        double height = 0.0, distance = 0.0;
-        for (Eigen::Index i = 0; i < data.points.rows(); ++i) {
-          const AxialCoordinates at = axial_coordinates(o, a, data.points.row(i).transpose());
-          height += data.weights[i] * at.height / total;
-          distance += data.weights[i] * at.distance / total;
-        }
-        const double above = height >= foot ? 1.0 : -1.0;
-        const double outside = distance >= cylinder.radius ? 1.0 : -1.0;
-        Surface tangent;
-        tangent.type = SurfaceType::Torus;
-        tangent.axis = a;
-        auto mean_square = [&](double log_r) {
-          tangent.minor = std::exp(log_r);
-          tangent.point = o + (foot + above * tangent.minor) * a;
-          tangent.radius = cylinder.radius + outside * tangent.minor;
-          double rms, max_error;
-          fit_residuals(tangent, data.points, data.weights, rms, max_error);
-          return rms * rms;
-        };
-        // From a hundredth of the patch's distance from the plane to a hundred times it, inside the
-        // cylinder less than its radius.
-        const double reach = std::abs(height - foot);
-        const double largest = outside > 0.0 ? 1e2 * reach : std::min(1e2 * reach, 0.999 * cylinder.radius);
-        if (!(largest > 1e-2 * reach)) continue;
-        mean_square(least_on_interval(mean_square, std::log(1e-2 * reach), std::log(largest)));
-        // A spindle torus (its tube crossing the axis) is no blend that a cylinder or cone passed for:
-        // where fillets meet in a corner ball the tube's circle shrinks onto the axis.
-        if (retype && tangent.radius < tangent.minor) continue;
-        const SurfaceFit fit = fit_of(tangent, data);
-        if (!best.valid || fit.rms < best.rms) best = fit;
+        if (features[c].type != SurfaceType::Cylinder || features[p].type != SurfaceType::Plane ||
+            std::abs(features[p].surface.axis.dot(features[c].surface.axis)) < std::cos(options.angle_tolerance))
+          continue;
+        const SurfaceFit fit = tangent_torus(data, features[c].surface, features[p].surface, !retype);
+        if (fit.valid && (!best.valid || fit.rms < best.rms)) best = fit;
       }
     if (!best.valid) continue;
     measure_spreads(data, best);
