@@ -476,6 +476,15 @@ Handle(Geom_Curve) fitted_curve(const std::vector<Vec3>& points, double tol) {
   return Handle(Geom_Curve)(fit.Curve());
 }
 
+// The largest `off` (a point's distance from the farther of an edge's two surfaces) along `curve`
+// from u0 to u1, at kToleranceSamples + 1 points.
+double farthest_off(const Handle(Geom_Curve)& curve, double u0, double u1, const std::function<double(const Vec3&)>& off) {
+  double farthest = 0.0;
+  for (int i = 0; i <= kToleranceSamples; ++i)
+    farthest = std::max(farthest, off(to_vec(curve->Value(u0 + (u1 - u0) * i / kToleranceSamples))));
+  return farthest;
+}
+
 // The curve fitted to a chain's points, from the corners `start` and `end` where they are given: the
 // chain's own end vertices lie off the corners (by the width of the mesh's chamfer), and an edge
 // that stopped there would leave gaps for its vertices' tolerance to bridge (a screw's slot walls
@@ -498,15 +507,10 @@ Handle(Geom_Curve) fitted_between(const std::vector<Vec3>& points, const Vec3* s
     if (u > from && u < to && !at_corner) kept.push_back(p);
   }
   if (end) kept.push_back(*end);
-  // Only where the curve through them stays on both surfaces (`off` of a point: its distance from the
-  // farther one): a corner may lie on another branch of their intersection.
+  // Only where the curve through them stays on both surfaces: a corner may lie on another branch of
+  // their intersection.
   const Handle(Geom_Curve) pinned = fitted_curve(kept, tol);
-  if (pinned.IsNull()) return first;
-  constexpr int kSamples = 32;
-  for (int i = 0; i <= kSamples; ++i) {
-    const double u = pinned->FirstParameter() + (pinned->LastParameter() - pinned->FirstParameter()) * i / kSamples;
-    if (off(to_vec(pinned->Value(u))) > tol) return first;
-  }
+  if (pinned.IsNull() || farthest_off(pinned, pinned->FirstParameter(), pinned->LastParameter(), off) > tol) return first;
   return pinned;
 }
 
@@ -1200,6 +1204,10 @@ BrepBuilder::ChainCurve BrepBuilder::chain_curve(size_t c) const {
   std::vector<Vec3> raw;
   for (int v : chain.vertices) raw.push_back(mesh_.V.row(v).transpose());
   const std::vector<Vec3> points = project_on_both(raw, local_a, b ? &local_b : nullptr);
+  // A point's distance from the farther of the edge's surfaces.
+  const auto off = [&](const Vec3& p) {
+    return std::max(std::abs(signed_distance(local_a(p), p)), b ? std::abs(signed_distance(local_b(p), p)) : 0.0);
+  };
   try {
     // A closed form is the exact answer when the chain lies near it; surfaces that touch
     // tangentially leave the mesh boundary anywhere in the zone where they are close. Surfaces
@@ -1236,9 +1244,6 @@ BrepBuilder::ChainCurve BrepBuilder::chain_curve(size_t c) const {
     }
     if (curve.IsNull()) {
       // Through the corners that lie on both surfaces (points of the curve they meet on).
-      const auto off = [&](const Vec3& p) {
-        return std::max(std::abs(signed_distance(local_a(p), p)), b ? std::abs(signed_distance(local_b(p), p)) : 0.0);
-      };
       const auto on_both = [&](const Vec3& corner) { return b && off(corner) <= tol_; };
       curve = chain.closed ? fitted_curve(points, tol_)
                            : fitted_between(points, on_both(ends[0]) ? &ends[0] : nullptr,
@@ -1317,13 +1322,7 @@ BrepBuilder::ChainCurve BrepBuilder::chain_curve(size_t c) const {
     // A fitted curve passes through the chain's points, which lie on both surfaces, and strays
     // from them in between by up to its fitting tolerance: its edge's tolerance says by how much.
     double edge_tolerance = Precision::Confusion();
-    if (report.curve == "fitted") {
-      for (int i = 0; i <= kToleranceSamples; ++i) {
-        const Vec3 p = to_vec(curve->Value(u0 + (u1 - u0) * i / kToleranceSamples));
-        edge_tolerance = std::max(edge_tolerance, 1.01 * std::abs(signed_distance(local_a(p), p)));
-        if (b) edge_tolerance = std::max(edge_tolerance, 1.01 * std::abs(signed_distance(local_b(p), p)));
-      }
-    }
+    if (report.curve == "fitted") edge_tolerance = std::max(edge_tolerance, 1.01 * farthest_off(curve, u0, u1, off));
     out.curve = curve;
     out.u0 = u0, out.u1 = u1, out.tolerance = edge_tolerance;
     out.p0 = p0, out.p1 = p1;

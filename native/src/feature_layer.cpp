@@ -1227,6 +1227,32 @@ void count_faces(const Eigen::VectorXd& area, const std::vector<int>& labels, st
     }
 }
 
+// A cylinder or cone beside a torus that explains its points about as well as its own surface does
+// (spread and normal spread within `residual_ratio` times its own, as merging requires) is a piece of
+// that torus (the half of a horn torus that touches no plane fitted a cone): its faces join the
+// torus that explains it best. `beside`: pairs of adjacent features. Returns whether any joined.
+bool join_torus_pieces(const std::vector<PatchPoints>& points, const std::vector<std::pair<int, int>>& beside,
+                       double residual_ratio, double normal_floor, std::vector<Feature>& features,
+                       std::vector<int>& labels) {
+  std::vector<int> join(features.size(), kNone);
+  std::vector<double> joined_spread(features.size(), 0.0);
+  for (const auto& [x, y] : beside)
+    for (const auto& [piece, torus] : {std::pair{x, y}, std::pair{y, x}}) {
+      const Feature &p = features[piece], &t = features[torus];
+      if (t.type != SurfaceType::Torus || (p.type != SurfaceType::Cylinder && p.type != SurfaceType::Cone)) continue;
+      SurfaceFit fit = fit_of(t.surface, points[piece]);
+      measure_spreads(points[piece], fit);
+      if (fit.spread > residual_ratio * p.spread || fit.normal_spread > residual_ratio * p.normal_spread + normal_floor)
+        continue;
+      if (join[piece] == kNone || fit.spread < joined_spread[piece]) join[piece] = torus, joined_spread[piece] = fit.spread;
+    }
+  if (std::all_of(join.begin(), join.end(), [](int j) { return j == kNone; })) return false;
+  for (int& l : labels)  // (a torus joins nothing: it stays what its pieces join)
+    if (l >= 0 && join[l] != kNone) l = join[l];
+  compact_features(labels, features);
+  return true;
+}
+
 // Freeform features that meet smoothly are pieces of one surface (the curvature histogram cuts a
 // freeform surface where its curvature passes a valley): adjacent freeform features join where the
 // border between them turns (the median turn between facets across it) no more sharply than the
@@ -1915,31 +1941,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     fit_about_shared_axes(settled, determined, layer.features);
     // The tori that the edge stages found or left, now that their neighbours are settled.
     tori_between_planes_and_cylinders(settled, beside, shared, layer.features);
-    // A cylinder or cone beside a torus that explains its points about as well as its own surface
-    // does (as merging requires) is a piece of that torus (the half of a horn torus that touches no
-    // plane fitted a cone): its faces join the torus.
-    {
-      std::vector<int> join(layer.features.size(), kNone);
-      std::vector<double> joined_spread(layer.features.size(), 0.0);
-      for (const auto& [x, y] : beside)
-        for (const auto& [piece, torus] : {std::pair{x, y}, std::pair{y, x}}) {
-          const Feature &p = layer.features[piece], &t = layer.features[torus];
-          if (t.type != SurfaceType::Torus || (p.type != SurfaceType::Cylinder && p.type != SurfaceType::Cone)) continue;
-          SurfaceFit fit = fit_of(t.surface, settled[piece]);
-          measure_spreads(settled[piece], fit);
-          if (fit.spread > options.residual_ratio * p.spread ||
-              fit.normal_spread > options.residual_ratio * p.normal_spread + shared.normal_floor)
-            continue;
-          if (join[piece] == kNone || fit.spread < joined_spread[piece]) join[piece] = torus, joined_spread[piece] = fit.spread;
-        }
-      bool any = false;
-      for (int& l : layer.labels)
-        if (l >= 0 && join[l] != kNone && join[join[l]] == kNone) l = join[l], any = true;
-      if (any) {
-        compact_features(layer.labels, layer.features);
-        count_faces(area, layer.labels, layer.features);
-      }
-    }
+    if (join_torus_pieces(settled, beside, options.residual_ratio, shared.normal_floor, layer.features, layer.labels))
+      count_faces(area, layer.labels, layer.features);
     planes_on_curved_surfaces(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), -1), shared,
                               layer.features);
     stage("edge_fillets");
