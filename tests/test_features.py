@@ -450,6 +450,28 @@ def test_blends_at_the_foot_of_the_benchmarks_boxblend_scan_are_tangent_tori():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_fillet_whose_flanks_the_planes_took_keeps_the_radius_of_its_arc():
+    """The benchmark's scan of as_bb_boxblend_03: every fillet is of r 5.08. Reassignment gave the
+    flanks of one (between z = 0 and x = 18.33) to the planes, and its cylinder, refitted to the
+    narrower arc left, took r 4.46: outside the fillets' equal-radius group, its B-rep face left
+    the part. Its radius now comes from the whole arc (its patch and the planes' flanks), placed
+    against both planes: every fillet of the part is one of the equal radii."""
+    m = shapes.benchmark_mesh("as_bb_boxblend_03.stp", "scan")
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    found = dominant(layer, m.gt, shapes.triangle_areas(m.V, m.F))
+    truth = shapes.bench_module("ground_truth").part_ground_truth(shapes.SHARED_STEP / "as_bb_boxblend_03.stp")
+    fillets = [face for face, f in enumerate(truth["faces"])
+               if f["type"] == "cylinder" and abs(f["params"]["radius"] - 5.08) < 1e-6]
+    assert len(fillets) == 12
+    for face in fillets:
+        assert found[face] is not None and found[face]["type"] == "cylinder", (face, found[face])
+        assert abs(found[face]["params"]["radius"] / 5.08 - 1) < 0.01, (face, found[face]["params"])
+    ids = {found[face]["id"] for face in fillets}
+    assert any(r["kind"] == "equal_radius" and ids <= set(r["features"]) for r in layer.relations)
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_sculpted_fillet_in_two_pieces_is_one_cylinder():
     """The benchmark's sculpted as_3boxesblend_05: its fillet of r 0.4 along y came out in two
     pieces whose axes the undulation turns 1.5° apart; each fits its own cylinder three times better

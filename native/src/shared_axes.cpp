@@ -228,19 +228,22 @@ int fillets_between_planes(const std::vector<FitData>& points, const std::vector
                            const SharedAxisOptions& options, std::vector<Feature>& features) {
   std::vector<std::vector<int>> planes_beside(features.size());
   for (const auto& [a, b] : adjacent)
-    if (features[a].type == SurfaceType::Plane && features[b].type == SurfaceType::Plane) {
-      planes_beside[a].push_back(b);
-      planes_beside[b].push_back(a);
-    }
+    for (const auto& [x, y] : {std::pair(a, b), std::pair(b, a)})
+      if (features[y].type == SurfaceType::Plane &&
+          (features[x].type == SurfaceType::Plane || features[x].type == SurfaceType::Cylinder))
+        planes_beside[x].push_back(y);
   auto angle = [](const Eigen::Vector3d& x, const Eigen::Vector3d& y) { return std::acos(std::clamp(x.dot(y), -1.0, 1.0)); };
   // Decided on the planes as they were: a strip that became a cylinder is no plane beside another.
   const std::vector<Feature> before = features;
   int changed = 0;
   for (size_t s = 0; s < features.size(); ++s) {
     const FitData& data = points[s];
-    if (before[s].type != SurfaceType::Plane || data.points.rows() < 2 * parameter_count(SurfaceType::Cylinder)) continue;
-    SurfaceFit strip = fit_of(before[s].surface, data);
-    const Eigen::Vector3d n = outward_normal(strip.surface, data);
+    const bool strip = before[s].type == SurfaceType::Plane;
+    if ((!strip && before[s].type != SurfaceType::Cylinder) ||
+        data.points.rows() < 2 * parameter_count(SurfaceType::Cylinder))
+      continue;
+    SurfaceFit own = fit_of(before[s].surface, data);
+    const Eigen::Vector3d n = strip ? outward_normal(own.surface, data) : Eigen::Vector3d::Zero();
     SurfaceFit best;
     const std::vector<int>& beside = planes_beside[s];
     std::array<Eigen::Vector3d, 4> best_planes;  // n1, p1, n2, p2
@@ -252,9 +255,12 @@ int fillets_between_planes(const std::vector<FitData>& points, const std::vector
         const Eigen::Vector3d n2 = outward_normal(f2.surface, points[beside[j]]);
         const double turn = angle(n1, n2);
         if (turn < options.angle_tolerance || turn > M_PI - options.angle_tolerance) continue;
-        if (angle(n1, n) + angle(n, n2) > turn + options.angle_tolerance) continue;  // not between them
+        if (strip && angle(n1, n) + angle(n, n2) > turn + options.angle_tolerance) continue;  // not between them
+        // A cylinder's axis runs along both planes.
+        if (!strip && std::abs(n1.cross(n2).normalized().dot(own.surface.axis)) < std::cos(options.angle_tolerance))
+          continue;
         const SurfaceFit fit = tangent_cylinder(data, n1, f1.surface.point, n2, f2.surface.point);
-        if (fit.valid && fit.rms < strip.rms && (!best.valid || fit.rms < best.rms)) {
+        if (fit.valid && (!strip || fit.rms < own.rms) && (!best.valid || fit.rms < best.rms)) {
           best = fit;
           best_planes = {n1, f1.surface.point, n2, f2.surface.point};
           best_pair = {beside[i], beside[j]};
@@ -262,9 +268,9 @@ int fillets_between_planes(const std::vector<FitData>& points, const std::vector
       }
     if (!best.valid) continue;
     measure_spreads(data, best);
-    measure_spreads(data, strip);
-    if (best.spread >= strip.spread ||
-        best.normal_spread > options.residual_ratio * strip.normal_spread + options.normal_floor)
+    measure_spreads(data, own);
+    if (strip && (best.spread >= own.spread ||
+                  best.normal_spread > options.residual_ratio * own.normal_spread + options.normal_floor))
       continue;
     // The radius from the whole arc: the planes beside the strip still hold its flanks, which pull
     // the tangent cylinder's radius short by a few percent. Fitted freely to the strip and the
@@ -278,11 +284,19 @@ int fillets_between_planes(const std::vector<FitData>& points, const std::vector
     const FitData arc = concatenate(concatenate(data, flank(points[best_pair[0]], c, u1, u2, reach)),
                                     flank(points[best_pair[1]], c, u2, u1, reach));
     const SurfaceFit free = fit_surface(SurfaceType::Cylinder, arc, FitOptions(), &best.surface);
-    if (free.valid) {
-      SurfaceFit placed = tangent_cylinder(data, best_planes[0], best_planes[1], best_planes[2], best_planes[3],
-                                           free.surface.radius);
-      if (placed.valid) measure_spreads(data, placed);
-      if (placed.valid && placed.spread < strip.spread) best = placed;
+    SurfaceFit placed;
+    if (free.valid)
+      placed = tangent_cylinder(data, best_planes[0], best_planes[1], best_planes[2], best_planes[3], free.surface.radius);
+    if (placed.valid) measure_spreads(data, placed);
+    if (strip) {
+      if (placed.valid && placed.spread < own.spread) best = placed;
+    } else {
+      // A cylinder keeps its own fit unless the placed one fits the whole arc better and its own
+      // points about as well (a fillet whose flanks the planes took fits a short radius to what is left).
+      if (!placed.valid || placed.spread > options.residual_ratio * own.spread ||
+          fit_of(placed.surface, arc).rms >= fit_of(own.surface, arc).rms)
+        continue;
+      best = placed;
     }
     features[s].set_fit(best);
     ++changed;

@@ -47,8 +47,12 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
 // radius from each); a plane between them (its normal between theirs) whose points that cylinder
 // fits better than the plane becomes it, with the radius of the cylinder fitted freely to its points
 // (the planes still hold its flanks, which pull the tangent one's radius short by a few percent).
-// A chamfer's points fit no such cylinder better than their plane. `adjacent`: pairs of features
-// sharing a border. Returns the number of features changed.
+// A chamfer's points fit no such cylinder better than their plane. A cylinder along two adjacent
+// planes takes the cylinder against both of the radius fitted to the whole arc (its points and the
+// planes' flanks), where that fits the arc better than its own and its points about as well
+// (spread within residual_ratio times): reassignment gives a fillet's flanks to the planes beside
+// it, and a fit to the narrower arc left drifts from the fillet's radius by a tenth. `adjacent`:
+// pairs of features sharing a border. Returns the number of features changed.
 int fillets_between_planes(const std::vector<FitData>& points, const std::vector<std::pair<int, int>>& adjacent,
                            const SharedAxisOptions& options, std::vector<Feature>& features);
 
