@@ -3,6 +3,8 @@
 // Everything CGAL stays inside this translation unit; the interface speaks TriangleMesh only.
 #include "remesh_cgal.h"
 
+#include "parallel.h"
+
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -372,14 +374,16 @@ std::vector<int> closest_faces(const TriangleMesh& mesh, const MatrixX3d& points
 
   std::vector<int> result(static_cast<std::size_t>(points.rows()));
   if (distances) distances->resize(result.size());
-  const ProgressSpan queries = progress.sub(0.2, 1.0);
-  for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    queries.tick(i, points.rows(), 1 << 12);
+  auto query = [&](int i) {
     const Point q(points(i, 0), points(i, 1), points(i, 2));
     const auto hit = tree.closest_point_and_primitive(q);
     result[static_cast<std::size_t>(i)] = face_row[static_cast<std::size_t>(hit.second)];
     if (distances) (*distances)[static_cast<std::size_t>(i)] = std::sqrt(CGAL::squared_distance(q, hit.first));
-  }
+  };
+  // The first query builds the tree's search structures (lazily, in CGAL); the others only read them.
+  const int count = static_cast<int>(points.rows());
+  if (count > 0) query(0);
+  for_each_polled_on_two_threads(count - 1, progress.sub(0.2, 1.0), [&](int i) { query(i + 1); }, 1 << 12);
   progress.step(1.0);
   return result;
 }
