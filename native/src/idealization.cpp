@@ -199,6 +199,121 @@ void one_cone_per_surface(std::vector<Feature>& features, const std::vector<Feat
   }
 }
 
+
+// 6b. Tori whose tube radius or centre the relations set: the tube radius is the median of its
+// group's and the centre the mean of its concentric group's, while on a band that does not go
+// round its tube the two correlate (a washer's bead fitted over its top, only the cylinder below
+// it: one torus came out with a tube too large and its centre too low, the other the other way
+// round, and the median of one with the mean of the other dropped the tops of both by 2 % of the
+// tube). The tori of each concentric group (each other torus alone) are fitted again about their
+// axis by Gauss–Newton: one centre height for the group, each torus's circle radius, and the tube
+// radius where no torus outside the group shares it; kept where the RMS over their points drops.
+void refit_related_tori(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
+                        const std::vector<FitData>& points, double cos_tolerance) {
+  std::vector<int> group_of(features.size(), -1);
+  std::vector<std::vector<int>> groups;
+  std::vector<char> related(features.size(), 0), radius_shared_beyond(features.size(), 0);
+  auto is_torus = [&](int m) {
+    return features[m].type == SurfaceType::Torus && static_cast<size_t>(m) < points.size() &&
+           points[m].points.rows() > 0 && features[m].surface.radius > features[m].surface.minor;
+  };
+  for (const FeatureRelation& r : relations) {
+    if (r.kind != "concentric" && r.kind != "equal_radius") continue;
+    for (int m : r.features) related[m] = 1;
+    if (r.kind != "concentric" || !std::all_of(r.features.begin(), r.features.end(), is_torus)) continue;
+    for (int m : r.features) group_of[m] = static_cast<int>(groups.size());
+    groups.push_back(r.features);
+  }
+  for (const Feature& f : features)
+    if (related[f.id] && is_torus(f.id) && group_of[f.id] < 0) {
+      group_of[f.id] = static_cast<int>(groups.size());
+      groups.push_back({f.id});
+    }
+  for (const FeatureRelation& r : relations)
+    if (r.kind == "equal_radius")
+      for (int m : r.features)
+        for (int n : r.features)
+          if (group_of[m] < 0 || group_of[m] != group_of[n]) radius_shared_beyond[m] = radius_shared_beyond[n] = 1;
+
+  for (const std::vector<int>& group : groups) {
+    const Surface& first = features[group.front()].surface;
+    const Eigen::Vector3d axis = first.axis, centre = first.point;
+    bool one_axis = true, free_tube = true;
+    for (int m : group) {
+      const Surface& s = features[m].surface;
+      one_axis &= std::abs(s.axis.dot(axis)) >= cos_tolerance && (s.point - centre).norm() <= 1e-9 * (1.0 + centre.norm());
+      free_tube &= !radius_shared_beyond[m];
+    }
+    if (!one_axis) continue;
+    // Heights along the axis and distances from it, per torus.
+    const int k = static_cast<int>(group.size());
+    std::vector<Eigen::MatrixX2d> profile(k);
+    for (int i = 0; i < k; ++i) {
+      const MatrixX3d& p = points[group[i]].points;
+      profile[i].resize(p.rows(), 2);
+      for (Eigen::Index j = 0; j < p.rows(); ++j) {
+        const AxialCoordinates c = axial_coordinates(centre, axis, p.row(j).transpose());
+        profile[i].row(j) << c.height, c.distance;
+      }
+    }
+    // x = (centre height, tube radius, circle radius of each torus).
+    Eigen::VectorXd x(2 + k);
+    x[0] = 0.0;
+    x[1] = first.minor;
+    for (int i = 0; i < k; ++i) x[2 + i] = features[group[i]].surface.radius;
+    auto squared_error = [&](const Eigen::VectorXd& y) {
+      double sum = 0.0;
+      for (int i = 0; i < k; ++i) {
+        const Eigen::VectorXd& w = points[group[i]].weights;
+        for (Eigen::Index j = 0; j < profile[i].rows(); ++j) {
+          const double e = std::hypot(profile[i](j, 0) - y[0], profile[i](j, 1) - y[2 + i]) - y[1];
+          sum += w[j] * e * e;
+        }
+      }
+      return sum;
+    };
+    const double initial = squared_error(x);
+    const int unknowns = 2 + k;
+    for (int iteration = 0; iteration < 20; ++iteration) {
+      Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(unknowns, unknowns);
+      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(unknowns);
+      for (int i = 0; i < k; ++i) {
+        const Eigen::VectorXd& w = points[group[i]].weights;
+        for (Eigen::Index j = 0; j < profile[i].rows(); ++j) {
+          const double dz = profile[i](j, 0) - x[0], dr = profile[i](j, 1) - x[2 + i];
+          const double d = std::hypot(dz, dr);
+          if (!(d > 0.0)) continue;
+          Eigen::VectorXd g = Eigen::VectorXd::Zero(unknowns);  // gradient of the residual d - tube
+          g[0] = -dz / d;
+          g[1] = -1.0;
+          g[2 + i] = -dr / d;
+          normal += w[j] * g * g.transpose();
+          rhs -= w[j] * (d - x[1]) * g;
+        }
+      }
+      if (!free_tube) {  // the tube radius stays as its equal-radius group has it
+        normal.row(1).setZero();
+        normal.col(1).setZero();
+        normal(1, 1) = 1.0;
+        rhs[1] = 0.0;
+      }
+      const Eigen::VectorXd step = normal.ldlt().solve(rhs);
+      if (!step.allFinite()) break;
+      x += step;
+      if (step.norm() <= 1e-12 * (1.0 + x.norm())) break;
+    }
+    bool ring = x[1] > 0.0;
+    for (int i = 0; i < k; ++i) ring &= x[2 + i] > x[1];
+    if (!x.allFinite() || !ring || !(squared_error(x) < initial)) continue;
+    for (int i = 0; i < k; ++i) {
+      Surface& s = features[group[i]].surface;
+      s.point = centre + x[0] * axis;
+      s.minor = x[1];
+      s.radius = x[2 + i];
+    }
+  }
+}
+
 }  // namespace
 
 int idealize_features(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
@@ -300,6 +415,8 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       for (int m : group) features[m].surface.point = centre;
     }
   }
+
+  if (options.points) refit_related_tori(features, relations, *options.points, cos_tolerance);
 
   // 7. Tangency (thesis 4.3): a cylinder tangent to planes parallel to its axis keeps its radius
   // (possibly just made equal to others) and moves its axis so that it touches them: one plane

@@ -8,7 +8,9 @@
 // a direction in a coordinate plane of that frame at 0, 10, 30, 45, 60 or 90 degrees (and their
 // supplements) from a frame axis snaps to it; so does a cone's half-angle, about such a direction,
 // where the ideal cone fits its points about as well, and coaxial cones that one cone fits (the
-// corner pieces of a chamfered hexagon) take it. Cylinders tangent to planes parallel to their axis
+// corner pieces of a chamfered hexagon) take it. Tori whose tube radius or centre the relations
+// share are fitted again about their axis with them (one tube and one centre per concentric group,
+// each its own circle). Cylinders tangent to planes parallel to their axis
 // move to touch them (keeping their radius), and so do tori tangent to a plane across their axis
 // or a coaxial cylinder (keeping their tube radius). No constraint solver: groups are made consistent one
 // relation kind at a time, in the order a designer fixes them (directions, then positions, then
@@ -29,7 +31,7 @@ struct IdealizationOptions {
   // The points of each feature (by id), or null: then a cylinder or cone whose axis the directions
   // and coaxial groups moved keeps its fitted profile; with them its profile is fitted again about
   // the ideal axis (the thesis's semi-defined features, 4.3: a narrow chamfer cone's fitted
-  // half-angle is off by as much as its tilt allows).
+  // half-angle is off by as much as its tilt allows); related tori are refitted only with them.
   const std::vector<FitData>* points = nullptr;
   // Whether the profiles of cylinders and cones whose axis moved are fitted again (with `points`).
   bool refit_moved_profiles = true;
