@@ -1259,6 +1259,27 @@ def test_cylinder_that_a_sculpted_undulation_tilts_into_a_cone_is_a_cylinder():
 
 
 @needs_freecad
+def test_fillet_between_a_cone_and_the_face_across_it_touches_both():
+    """The noisy scan of the turned knob: its r 1.5 fillet rounds the 45° cone into the flat top. The
+    torus is tangent to both (feature graph) and idealization makes it touch both: its centre lies its
+    tube radius below the top and its tube's circle its tube radius inside the cone (before, only
+    tangency to planes and cylinders was made exact, and the circle stayed as fitted)."""
+    part = shapes.rounded_knob()
+    V, F, _, diag = shapes.uniform_remesh(part)
+    layer = idealize.idealize(idealize.Mesh(shapes.normal_noise(V, F, diag, 0), F))
+    cones = [f for f in layer.features if f["type"] == "cone"]
+    fillets = [f for f in layer.features if f["type"] == "torus" and abs(f["params"]["minor"] / 1.5 - 1) < 0.1]
+    assert len(cones) == 1 and len(fillets) == 1, [(f["type"], f["params"]) for f in layer.features]
+    cone, torus = cones[0]["params"], fillets[0]["params"]
+    assert {cones[0]["id"], fillets[0]["id"]} in [set(r["features"]) for r in layer.relations if r["kind"] == "tangent"]
+    axis = np.asarray(cone["axis"])
+    height = np.dot(np.asarray(torus["center"]) - cone["apex"], axis)
+    # Signed distance of the tube's circle from the cone's generator in a meridian plane.
+    off_cone = torus["major"] * np.cos(cone["half_angle"]) - height * np.sin(cone["half_angle"])
+    assert abs(abs(off_cone) - torus["minor"]) < 1e-9 * diag, (off_cone, torus["minor"])
+
+
+@needs_freecad
 @pytest.mark.parametrize("seed", [1, 2])
 def test_bend_of_a_noisy_scanned_rod_is_a_torus_tangent_to_both_runs(seed):
     """Across the bend of a rod, the tube's circle has the straight runs' radius: segmentation joins

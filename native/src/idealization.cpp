@@ -106,6 +106,16 @@ double to_distance_from(const Surface& plane, const Eigen::Vector3d& point, doub
   return (height >= 0.0 ? 1.0 : -1.0) * distance - height;
 }
 
+// The radius of the circle that the centre of a tube of radius `tube` follows to touch the cylinder
+// or cone `wall` about the wall's axis, the centre at `height` along the axis from the wall's point
+// (a cone's apex), on the side `side` of the wall (+1 away from the axis, -1 towards it).
+double touching_circle_radius(const Surface& wall, double height, double tube, double side) {
+  if (wall.type == SurfaceType::Cylinder) return wall.radius + side * tube;
+  // A cone's generator through the apex, (height, distance) = t (cos a, sin a): the tube's centre
+  // lies `tube` from it along its normal (-sin a, cos a).
+  return (side * tube + height * std::sin(wall.half_angle)) / std::cos(wall.half_angle);
+}
+
 // The surfaces of the features of `type` in a tangent relation with feature `id`.
 std::vector<const Surface*> tangent_surfaces(int id, SurfaceType type, const std::vector<FeatureRelation>& relations,
                                              const std::vector<Feature>& features) {
@@ -481,10 +491,11 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
     sphere.surface.radius = radius;
   }
 
-  // 9. A torus tangent to a plane across its axis and to a coaxial cylinder (the fillet at the foot
-  // of a boss or the rim of a bore) keeps its tube radius and touches both: its centre lies the tube
-  // radius from the plane, its circle the tube radius from the cylinder, about the cylinder's axis
-  // (coaxial with it, or within the distance tolerance of it).
+  // 9. A torus tangent to a plane across its axis and to a coaxial cylinder or cone (the fillet at
+  // the foot of a boss, the rim of a bore, between a cone and the face across it) keeps its tube
+  // radius and touches both: its centre lies the tube radius from the plane, its circle the tube
+  // radius from the wall, about the wall's axis (coaxial with it, or within the distance tolerance
+  // of it).
   auto coaxial = [&](int id, const Surface& surface) {
     return std::any_of(relations.begin(), relations.end(), [&](const FeatureRelation& r) {
       return r.kind == "coaxial" && std::find(r.features.begin(), r.features.end(), id) != r.features.end() &&
@@ -499,15 +510,18 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       t.point += to_distance_from(*plane, t.point, t.minor) * plane->axis;
       break;
     }
-    for (const Surface* cylinder : tangent_surfaces(torus.id, SurfaceType::Cylinder, relations, features)) {
-      const AxialCoordinates centre = axial_coordinates(cylinder->point, cylinder->axis, t.point);
-      if (std::abs(cylinder->axis.dot(t.axis)) < cos_tolerance ||
-          (centre.distance > options.distance_tolerance && !coaxial(torus.id, *cylinder)))
+    std::vector<const Surface*> walls = tangent_surfaces(torus.id, SurfaceType::Cylinder, relations, features);
+    for (const Surface* cone : tangent_surfaces(torus.id, SurfaceType::Cone, relations, features)) walls.push_back(cone);
+    for (const Surface* wall : walls) {
+      const AxialCoordinates centre = axial_coordinates(wall->point, wall->axis, t.point);
+      if (std::abs(wall->axis.dot(t.axis)) < cos_tolerance ||
+          (centre.distance > options.distance_tolerance && !coaxial(torus.id, *wall)))
         continue;
-      // On the cylinder's axis, which its tangent planes may have moved (step 7).
-      t.axis = aligned(cylinder->axis, t.axis);
-      t.point = cylinder->point + centre.height * cylinder->axis;
-      t.radius = t.radius >= cylinder->radius ? cylinder->radius + t.minor : cylinder->radius - t.minor;
+      // On the wall's axis, which a cylinder's tangent planes may have moved (step 7).
+      t.axis = aligned(wall->axis, t.axis);
+      t.point = wall->point + centre.height * wall->axis;
+      const double side = t.radius >= touching_circle_radius(*wall, centre.height, 0.0, 1.0) ? 1.0 : -1.0;
+      t.radius = touching_circle_radius(*wall, centre.height, t.minor, side);
       break;
     }
   }

@@ -12,7 +12,7 @@
 // share are fitted again about their axis with them (one tube and one centre per concentric group,
 // each its own circle). Cylinders tangent to planes parallel to their axis
 // move to touch them (keeping their radius), and so do tori tangent to a plane across their axis
-// or a coaxial cylinder (keeping their tube radius). No constraint solver: groups are made consistent one
+// or a coaxial cylinder or cone (keeping their tube radius). No constraint solver: groups are made consistent one
 // relation kind at a time, in the order a designer fixes them (directions, then positions, then
 // profiles about the fixed axes, then sizes, then tangency), so an answer always exists.
 #pragma once
