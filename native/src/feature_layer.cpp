@@ -1940,7 +1940,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     determined.only_determined = true;
     fit_about_shared_axes(settled, determined, layer.features);
     // The tori that the edge stages found or left, now that their neighbours are settled.
-    tori_between_planes_and_cylinders(settled, beside, shared, layer.features);
+    tori_between_planes_and_walls(settled, beside, shared, layer.features);
     if (join_torus_pieces(settled, beside, options.residual_ratio, shared.normal_floor, layer.features, layer.labels))
       count_faces(area, layer.labels, layer.features);
     planes_on_curved_surfaces(patch_points(mesh, layer.labels, static_cast<int>(layer.features.size()), -1), shared,

@@ -106,16 +106,6 @@ double to_distance_from(const Surface& plane, const Eigen::Vector3d& point, doub
   return (height >= 0.0 ? 1.0 : -1.0) * distance - height;
 }
 
-// The radius of the circle that the centre of a tube of radius `tube` follows to touch the cylinder
-// or cone `wall` about the wall's axis, the centre at `height` along the axis from the wall's point
-// (a cone's apex), on the side `side` of the wall (+1 away from the axis, -1 towards it).
-double touching_circle_radius(const Surface& wall, double height, double tube, double side) {
-  if (wall.type == SurfaceType::Cylinder) return wall.radius + side * tube;
-  // A cone's generator through the apex, (height, distance) = t (cos a, sin a): the tube's centre
-  // lies `tube` from it along its normal (-sin a, cos a).
-  return (side * tube + height * std::sin(wall.half_angle)) / std::cos(wall.half_angle);
-}
-
 // The surfaces of the features of `type` in a tangent relation with feature `id`.
 std::vector<const Surface*> tangent_surfaces(int id, SurfaceType type, const std::vector<FeatureRelation>& relations,
                                              const std::vector<Feature>& features) {
@@ -217,19 +207,26 @@ void one_cone_per_surface(std::vector<Feature>& features, const std::vector<Feat
 // round, and the median of one with the mean of the other dropped the tops of both by 2 % of the
 // tube). The tori of each concentric group (each other torus alone) are fitted again about their
 // axis by Gauss–Newton: one centre height for the group, each torus's circle radius, and the tube
-// radius where no torus outside the group shares it; kept where the RMS over their points drops.
+// radius where no torus outside the group shares it. A coaxial cylinder tangent to a torus, whose
+// radius no other feature shares, is fitted with it as the circle radius less or plus the tube
+// (step 9 would make it so): its points fix where the tube meets it, which the torus's own points
+// near that tangent border hardly do. Kept where the RMS over all their points drops from what
+// step 9 would make of the fits.
 void refit_related_tori(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
-                        const std::vector<FitData>& points, double cos_tolerance) {
+                        const std::vector<FitData>& points, double cos_tolerance, double distance_tolerance) {
   std::vector<int> group_of(features.size(), -1);
   std::vector<std::vector<int>> groups;
-  std::vector<char> related(features.size(), 0), radius_shared_beyond(features.size(), 0);
+  std::vector<char> related(features.size(), 0), radius_shared_beyond(features.size(), 0), equal_radius(features.size(), 0);
+  auto has_points = [&](int m) { return static_cast<size_t>(m) < points.size() && points[m].points.rows() > 0; };
   auto is_torus = [&](int m) {
-    return features[m].type == SurfaceType::Torus && static_cast<size_t>(m) < points.size() &&
-           points[m].points.rows() > 0 && features[m].surface.radius > features[m].surface.minor;
+    return features[m].type == SurfaceType::Torus && has_points(m) && features[m].surface.radius > features[m].surface.minor;
   };
   for (const FeatureRelation& r : relations) {
     if (r.kind != "concentric" && r.kind != "equal_radius") continue;
-    for (int m : r.features) related[m] = 1;
+    for (int m : r.features) {
+      related[m] = 1;
+      if (r.kind == "equal_radius") equal_radius[m] = 1;
+    }
     if (r.kind != "concentric" || !std::all_of(r.features.begin(), r.features.end(), is_torus)) continue;
     for (int m : r.features) group_of[m] = static_cast<int>(groups.size());
     groups.push_back(r.features);
@@ -245,6 +242,15 @@ void refit_related_tori(std::vector<Feature>& features, const std::vector<Featur
         for (int n : r.features)
           if (group_of[m] < 0 || group_of[m] != group_of[n]) radius_shared_beyond[m] = radius_shared_beyond[n] = 1;
 
+  // What the fit sees of one feature: heights along the group's axis and distances from it; a
+  // cylinder's radius is its torus's circle radius less `side` times the tube.
+  struct Piece {
+    int feature, torus;  // the feature, and the group's torus it belongs to (index)
+    bool cylinder;
+    double side;
+    Eigen::MatrixX2d profile;
+  };
+  std::vector<char> taken(features.size(), 0);
   for (const std::vector<int>& group : groups) {
     const Surface& first = features[group.front()].surface;
     const Eigen::Vector3d axis = first.axis, centre = first.point;
@@ -255,50 +261,78 @@ void refit_related_tori(std::vector<Feature>& features, const std::vector<Featur
       free_tube &= !radius_shared_beyond[m];
     }
     if (!one_axis) continue;
-    // Heights along the axis and distances from it, per torus.
     const int k = static_cast<int>(group.size());
-    std::vector<Eigen::MatrixX2d> profile(k);
-    for (int i = 0; i < k; ++i) {
-      const MatrixX3d& p = points[group[i]].points;
-      profile[i].resize(p.rows(), 2);
-      for (Eigen::Index j = 0; j < p.rows(); ++j) {
-        const AxialCoordinates c = axial_coordinates(centre, axis, p.row(j).transpose());
-        profile[i].row(j) << c.height, c.distance;
-      }
-    }
     // x = (centre height, tube radius, circle radius of each torus).
     Eigen::VectorXd x(2 + k);
     x[0] = 0.0;
     x[1] = first.minor;
     for (int i = 0; i < k; ++i) x[2 + i] = features[group[i]].surface.radius;
+    std::vector<Piece> pieces;
+    for (int i = 0; i < k; ++i) {
+      pieces.push_back({group[i], i, false, 0.0, {}});
+      for (const FeatureRelation& r : relations) {
+        if (r.kind != "tangent" || (r.features[0] != group[i] && r.features[1] != group[i])) continue;
+        const int c = r.features[0] == group[i] ? r.features[1] : r.features[0];
+        const Surface& cylinder = features[c].surface;
+        if (features[c].type != SurfaceType::Cylinder || taken[c] || equal_radius[c] || !has_points(c) ||
+            std::abs(cylinder.axis.dot(axis)) < cos_tolerance ||
+            axial_coordinates(cylinder.point, cylinder.axis, centre).distance > distance_tolerance)
+          continue;
+        taken[c] = 1;
+        const double side = x[2 + i] >= cylinder.radius ? 1.0 : -1.0;
+        x[2 + i] = cylinder.radius + side * x[1];  // as step 9 would have it
+        pieces.push_back({c, i, true, side, {}});
+        break;
+      }
+    }
+    for (Piece& piece : pieces) {
+      const MatrixX3d& p = points[piece.feature].points;
+      piece.profile.resize(p.rows(), 2);
+      for (Eigen::Index j = 0; j < p.rows(); ++j) {
+        const AxialCoordinates c = axial_coordinates(centre, axis, p.row(j).transpose());
+        piece.profile.row(j) << c.height, c.distance;
+      }
+    }
+    const int unknowns = 2 + k;
+    // Residual of point j of a piece and its gradient with respect to x.
+    auto residual = [&](const Piece& piece, Eigen::Index j, const Eigen::VectorXd& y, Eigen::VectorXd* gradient) {
+      const double dz = piece.profile(j, 0) - y[0], dr = piece.profile(j, 1) - y[2 + piece.torus];
+      if (gradient) gradient->setZero(unknowns);
+      if (piece.cylinder) {
+        if (gradient) {
+          (*gradient)[1] = piece.side;
+          (*gradient)[2 + piece.torus] = -1.0;
+        }
+        return dr + piece.side * y[1];
+      }
+      const double d = std::hypot(dz, dr);
+      if (gradient && d > 0.0) {
+        (*gradient)[0] = -dz / d;
+        (*gradient)[1] = -1.0;
+        (*gradient)[2 + piece.torus] = -dr / d;
+      }
+      return d - y[1];
+    };
     auto squared_error = [&](const Eigen::VectorXd& y) {
       double sum = 0.0;
-      for (int i = 0; i < k; ++i) {
-        const Eigen::VectorXd& w = points[group[i]].weights;
-        for (Eigen::Index j = 0; j < profile[i].rows(); ++j) {
-          const double e = std::hypot(profile[i](j, 0) - y[0], profile[i](j, 1) - y[2 + i]) - y[1];
-          sum += w[j] * e * e;
+      for (const Piece& piece : pieces)
+        for (Eigen::Index j = 0; j < piece.profile.rows(); ++j) {
+          const double e = residual(piece, j, y, nullptr);
+          sum += points[piece.feature].weights[j] * e * e;
         }
-      }
       return sum;
     };
     const double initial = squared_error(x);
-    const int unknowns = 2 + k;
+    Eigen::VectorXd g;
     for (int iteration = 0; iteration < 20; ++iteration) {
       Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(unknowns, unknowns);
       Eigen::VectorXd rhs = Eigen::VectorXd::Zero(unknowns);
-      for (int i = 0; i < k; ++i) {
-        const Eigen::VectorXd& w = points[group[i]].weights;
-        for (Eigen::Index j = 0; j < profile[i].rows(); ++j) {
-          const double dz = profile[i](j, 0) - x[0], dr = profile[i](j, 1) - x[2 + i];
-          const double d = std::hypot(dz, dr);
-          if (!(d > 0.0)) continue;
-          Eigen::VectorXd g = Eigen::VectorXd::Zero(unknowns);  // gradient of the residual d - tube
-          g[0] = -dz / d;
-          g[1] = -1.0;
-          g[2 + i] = -dr / d;
+      for (const Piece& piece : pieces) {
+        const Eigen::VectorXd& w = points[piece.feature].weights;
+        for (Eigen::Index j = 0; j < piece.profile.rows(); ++j) {
+          const double e = residual(piece, j, x, &g);
           normal += w[j] * g * g.transpose();
-          rhs -= w[j] * (d - x[1]) * g;
+          rhs -= w[j] * e * g;
         }
       }
       if (!free_tube) {  // the tube radius stays as its equal-radius group has it
@@ -314,12 +348,17 @@ void refit_related_tori(std::vector<Feature>& features, const std::vector<Featur
     }
     bool ring = x[1] > 0.0;
     for (int i = 0; i < k; ++i) ring &= x[2 + i] > x[1];
+    for (const Piece& piece : pieces) ring &= !piece.cylinder || x[2 + piece.torus] - piece.side * x[1] > 0.0;
     if (!x.allFinite() || !ring || !(squared_error(x) < initial)) continue;
-    for (int i = 0; i < k; ++i) {
-      Surface& s = features[group[i]].surface;
+    for (const Piece& piece : pieces) {
+      Surface& s = features[piece.feature].surface;
+      if (piece.cylinder) {
+        s.radius = x[2 + piece.torus] - piece.side * x[1];
+        continue;
+      }
       s.point = centre + x[0] * axis;
       s.minor = x[1];
-      s.radius = x[2 + i];
+      s.radius = x[2 + piece.torus];
     }
   }
 }
@@ -426,7 +465,7 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
     }
   }
 
-  if (options.points) refit_related_tori(features, relations, *options.points, cos_tolerance);
+  if (options.points) refit_related_tori(features, relations, *options.points, cos_tolerance, options.distance_tolerance);
 
   // 7. Tangency (thesis 4.3): a cylinder tangent to planes parallel to its axis keeps its radius
   // (possibly just made equal to others) and moves its axis so that it touches them: one plane

@@ -10,11 +10,12 @@
 // where the ideal cone fits its points about as well, and coaxial cones that one cone fits (the
 // corner pieces of a chamfered hexagon) take it. Tori whose tube radius or centre the relations
 // share are fitted again about their axis with them (one tube and one centre per concentric group,
-// each its own circle). Cylinders tangent to planes parallel to their axis
-// move to touch them (keeping their radius), and so do tori tangent to a plane across their axis
-// or a coaxial cylinder or cone (keeping their tube radius). No constraint solver: groups are made consistent one
-// relation kind at a time, in the order a designer fixes them (directions, then positions, then
-// profiles about the fixed axes, then sizes, then tangency), so an answer always exists.
+// each its own circle), together with the coaxial cylinders they touch. Cylinders tangent to
+// planes parallel to their axis move to touch them (keeping their radius), and so do tori tangent
+// to a plane across their axis or a coaxial cylinder or cone (keeping their tube radius). No
+// constraint solver: groups are made consistent one relation kind at a time, in the order a
+// designer fixes them (directions, then positions, then profiles about the fixed axes, then sizes,
+// then tangency), so an answer always exists.
 #pragma once
 
 #include "feature_layer.h"

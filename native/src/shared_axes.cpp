@@ -159,40 +159,39 @@ SurfaceFit tangent_cylinder(const FitData& data, const Eigen::Vector3d& n1, cons
   return best;
 }
 
-// The torus tangent to the plane (across the cylinder's axis) and to the cylinder, about the
-// cylinder's axis, that fits `data` best, on the sides of both where the points lie: the tube radius
+// The torus tangent to the plane (across the wall's axis) and to the wall, a cylinder or a cone, about
+// the wall's axis, that fits `data` best, on the sides of both where the points lie: the tube radius
 // is searched over its logarithm, on a grid and then by golden section. Invalid where the points lie
 // in the plane, or (unless `spindle`) where the best is a spindle torus, its tube crossing the axis
 // (where fillets meet in a corner ball the tube's circle shrinks onto the axis).
-SurfaceFit tangent_torus(const FitData& data, const Surface& cylinder, const Surface& plane, bool spindle) {
-  const Eigen::Vector3d& o = cylinder.point;
-  const Eigen::Vector3d& a = cylinder.axis;
+SurfaceFit tangent_torus(const FitData& data, const Surface& wall, const Surface& plane, bool spindle) {
+  const Eigen::Vector3d& o = wall.point;
+  const Eigen::Vector3d& a = wall.axis;
   const double foot = (plane.point - o).dot(a);
-  // (The mean distance of the points from the axis: the centroid of a ring lies on it.)
   const double total = data.weights.sum();
-  double height = 0.0, distance = 0.0;
+  double height = 0.0, off_wall = 0.0;
   for (Eigen::Index i = 0; i < data.points.rows(); ++i) {
-    const AxialCoordinates at = axial_coordinates(o, a, data.points.row(i).transpose());
-    height += data.weights[i] * at.height / total;
-    distance += data.weights[i] * at.distance / total;
+    height += data.weights[i] * axial_coordinates(o, a, data.points.row(i).transpose()).height / total;
+    off_wall += data.weights[i] * signed_distance(wall, data.points.row(i).transpose()) / total;
   }
   const double above = height >= foot ? 1.0 : -1.0;
-  const double outside = distance >= cylinder.radius ? 1.0 : -1.0;
+  const double outside = off_wall >= 0.0 ? 1.0 : -1.0;
   Surface tangent;
   tangent.type = SurfaceType::Torus;
   tangent.axis = a;
   auto mean_square = [&](double log_r) {
     tangent.minor = std::exp(log_r);
     tangent.point = o + (foot + above * tangent.minor) * a;
-    tangent.radius = cylinder.radius + outside * tangent.minor;
+    tangent.radius = touching_circle_radius(wall, foot + above * tangent.minor, tangent.minor, outside);
     double rms, max_error;
     fit_residuals(tangent, data.points, data.weights, rms, max_error);
     return rms * rms;
   };
   // From a hundredth of the points' distance from the plane to a hundred times it, inside the
-  // cylinder less than its radius.
+  // wall less than its radius at the plane.
   const double reach = std::abs(height - foot);
-  const double largest = outside > 0.0 ? 1e2 * reach : std::min(1e2 * reach, 0.999 * cylinder.radius);
+  const double wall_radius = touching_circle_radius(wall, foot, 0.0, 1.0);
+  const double largest = outside > 0.0 ? 1e2 * reach : std::min(1e2 * reach, 0.999 * wall_radius);
   if (!(largest > 1e-2 * reach)) return SurfaceFit();
   mean_square(least_on_interval(mean_square, std::log(1e-2 * reach), std::log(largest)));
   if (!spindle && tangent.radius < tangent.minor) return SurfaceFit();
@@ -304,9 +303,8 @@ int fillets_between_planes(const std::vector<FitData>& points, const std::vector
   return changed;
 }
 
-int tori_between_planes_and_cylinders(const std::vector<FitData>& points,
-                                      const std::vector<std::pair<int, int>>& adjacent, const SharedAxisOptions& options,
-                                      std::vector<Feature>& features) {
+int tori_between_planes_and_walls(const std::vector<FitData>& points, const std::vector<std::pair<int, int>>& adjacent,
+                                  const SharedAxisOptions& options, std::vector<Feature>& features) {
   std::vector<std::vector<int>> beside(features.size());
   for (const auto& [a, b] : adjacent) {
     beside[a].push_back(b);
@@ -319,11 +317,13 @@ int tori_between_planes_and_cylinders(const std::vector<FitData>& points,
     if ((!retype && features[t].type != SurfaceType::Torus) || data.points.rows() < 2 * parameter_count(SurfaceType::Torus))
       continue;
     SurfaceFit best;
-    // Every plane and cylinder beside it that meet at a right angle (not the torus's own axis,
-    // which a quarter of a noisy tube tilts by degrees, and its centre with it).
+    // Every plane and wall (cylinder or cone) beside it that meet at a right angle to the wall's
+    // axis (not the torus's own axis, which a quarter of a noisy tube tilts by degrees, and its
+    // centre with it).
     for (int c : beside[t])
       for (int p : beside[t]) {
-        if (features[c].type != SurfaceType::Cylinder || features[p].type != SurfaceType::Plane ||
+        const SurfaceType wall = features[c].type;
+        if ((wall != SurfaceType::Cylinder && wall != SurfaceType::Cone) || features[p].type != SurfaceType::Plane ||
             std::abs(features[p].surface.axis.dot(features[c].surface.axis)) < std::cos(options.angle_tolerance))
           continue;
         const SurfaceFit fit = tangent_torus(data, features[c].surface, features[p].surface, !retype);

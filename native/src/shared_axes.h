@@ -56,21 +56,21 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
 int fillets_between_planes(const std::vector<FitData>& points, const std::vector<std::pair<int, int>>& adjacent,
                            const SharedAxisOptions& options, std::vector<Feature>& features);
 
-// Fillets at the foot of a boss or the rim of a bore: a torus beside a plane across its axis and a
-// coaxial cylinder, both tangent to it, has one free parameter, its tube radius (the centre lies that
-// far from the plane, the tube's circle that far from the cylinder). A narrow fillet's own fit of
-// seven parameters takes its tube radius and place from a few degrees of arc, and a quarter of a
-// noisy tube tilts its axis by degrees. Every plane and cylinder beside the feature that meet at a
-// right angle are tried (on the sides of them its points lie); the tangent torus of least RMS
+// Fillets at the foot of a boss, the rim of a bore or between a cone and the face across it: a
+// torus beside a plane across its axis and a coaxial wall (cylinder or cone), both tangent to it, has
+// one free parameter, its tube radius (the centre lies that far from the plane, the tube's circle
+// that far from the wall). A narrow fillet's own fit of seven parameters takes its tube radius and
+// place from a few degrees of arc, and a quarter of a noisy tube tilts its axis by degrees. Every
+// plane and wall beside the feature, the plane across the wall's axis, are tried (on the sides of
+// them its points lie); the tangent torus of least RMS
 // distance replaces its own fit where it fits about as well (spread within residual_ratio times,
 // without the distance tolerance, which on a sculpted part would let in a torus that the undulation
 // of its neighbours puts off its patch; normal spread as identification requires). A cylinder or
 // cone (what such a blend passes for) becomes that torus where it fits at least as well, unless it
 // is a spindle torus. `adjacent`: pairs of features sharing a border. Returns the number of features
 // changed.
-int tori_between_planes_and_cylinders(const std::vector<FitData>& points,
-                                      const std::vector<std::pair<int, int>>& adjacent, const SharedAxisOptions& options,
-                                      std::vector<Feature>& features);
+int tori_between_planes_and_walls(const std::vector<FitData>& points, const std::vector<std::pair<int, int>>& adjacent,
+                                  const SharedAxisOptions& options, std::vector<Feature>& features);
 
 // Pieces of a curved surface that fit a plane: a chamfer cone cut into six narrow pieces by a
 // hexagon's flats has pieces whose interior vertices a plane fits as well as the cone. Over all

@@ -40,6 +40,13 @@ int parameter_count(SurfaceType type) {
   return 0;
 }
 
+double touching_circle_radius(const Surface& wall, double height, double tube, double side) {
+  if (wall.type == SurfaceType::Cylinder) return wall.radius + side * tube;
+  // A cone's generator through the apex, (height, distance) = t (cos a, sin a): the tube's centre
+  // lies `tube` from it along its normal (-sin a, cos a).
+  return (side * tube + height * std::sin(wall.half_angle)) / std::cos(wall.half_angle);
+}
+
 void orthonormal_frame(const Eigen::Vector3d& axis, Eigen::Vector3d& e1, Eigen::Vector3d& e2) {
   // Cross with the coordinate axis least aligned with `axis`: never nearly parallel.
   Eigen::Index smallest;

@@ -50,6 +50,12 @@ Eigen::Vector3d closest_point(const Surface& surface, const Eigen::Vector3d& p);
 // Unit surface normal at the point of the surface closest to p, pointing to positive distances.
 Eigen::Vector3d surface_normal(const Surface& surface, const Eigen::Vector3d& p);
 
+// The radius of the circle that the centre of a tube of radius `tube` follows to touch the cylinder
+// or cone `wall` about the wall's axis, the centre at `height` along the axis from the wall's point
+// (a cone's apex), on the side `side` of the wall (+1 away from the axis, -1 towards it): the
+// meridian of a fillet between a wall and a face across its axis.
+double touching_circle_radius(const Surface& wall, double height, double tube, double side);
+
 // Two unit vectors completing `axis` (unit) to a right-handed orthonormal frame, chosen
 // deterministically from the axis alone.
 void orthonormal_frame(const Eigen::Vector3d& axis, Eigen::Vector3d& e1, Eigen::Vector3d& e2);
