@@ -106,15 +106,23 @@ double to_distance_from(const Surface& plane, const Eigen::Vector3d& point, doub
   return (height >= 0.0 ? 1.0 : -1.0) * distance - height;
 }
 
-// The surfaces of the features of `type` in a tangent relation with feature `id`.
+// The features of `type` in a tangent relation with feature `id` (ids, in the relations' order).
+std::vector<int> tangent_features(int id, SurfaceType type, const std::vector<FeatureRelation>& relations,
+                                  const std::vector<Feature>& features) {
+  std::vector<int> out;
+  for (const FeatureRelation& r : relations) {
+    if (r.kind != "tangent" || (r.features[0] != id && r.features[1] != id)) continue;
+    const int other = r.features[0] == id ? r.features[1] : r.features[0];
+    if (features[other].type == type) out.push_back(other);
+  }
+  return out;
+}
+
+// Their surfaces.
 std::vector<const Surface*> tangent_surfaces(int id, SurfaceType type, const std::vector<FeatureRelation>& relations,
                                              const std::vector<Feature>& features) {
   std::vector<const Surface*> out;
-  for (const FeatureRelation& r : relations) {
-    if (r.kind != "tangent" || (r.features[0] != id && r.features[1] != id)) continue;
-    const Feature& other = features[r.features[0] == id ? r.features[1] : r.features[0]];
-    if (other.type == type) out.push_back(&other.surface);
-  }
+  for (int m : tangent_features(id, type, relations, features)) out.push_back(&features[m].surface);
   return out;
 }
 
@@ -199,7 +207,6 @@ void one_cone_per_surface(std::vector<Feature>& features, const std::vector<Feat
   }
 }
 
-
 // 6b. Tori whose tube radius or centre the relations set: the tube radius is the median of its
 // group's and the centre the mean of its concentric group's, while on a band that does not go
 // round its tube the two correlate (a washer's bead fitted over its top, only the cylinder below
@@ -270,11 +277,9 @@ void refit_related_tori(std::vector<Feature>& features, const std::vector<Featur
     std::vector<Piece> pieces;
     for (int i = 0; i < k; ++i) {
       pieces.push_back({group[i], i, false, 0.0, {}});
-      for (const FeatureRelation& r : relations) {
-        if (r.kind != "tangent" || (r.features[0] != group[i] && r.features[1] != group[i])) continue;
-        const int c = r.features[0] == group[i] ? r.features[1] : r.features[0];
+      for (int c : tangent_features(group[i], SurfaceType::Cylinder, relations, features)) {
         const Surface& cylinder = features[c].surface;
-        if (features[c].type != SurfaceType::Cylinder || taken[c] || equal_radius[c] || !has_points(c) ||
+        if (taken[c] || equal_radius[c] || !has_points(c) ||
             std::abs(cylinder.axis.dot(axis)) < cos_tolerance ||
             axial_coordinates(cylinder.point, cylinder.axis, centre).distance > distance_tolerance)
           continue;
