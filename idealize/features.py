@@ -20,14 +20,17 @@ class FeatureLayer:
         freeform), params (plane normal/point, cylinder axis/point/radius, cone axis/apex/
         half_angle in radians, sphere center/radius, torus axis/center/major/minor), rms and
         max_error of the fit, area, triangles, curvature_type (the type the curvature signs
-        suggested), best_fit (type and params of the best analytic fit, also for freeform).
+        suggested), best_fit (type and params of the best analytic fit, also for freeform),
+        radius_error (standard error of the fitted radius of a cylinder or sphere, of a torus's
+        tube radius; 0 for the other types).
     adjacency: list of {"a", "b", "continuity" ("G0" sharp or "G1" tangent), "angle", "length"}.
     relations: list of {"kind", "features"}: parallel, coplanar, coaxial, equal_radius and
         concentric groups; perpendicular and tangent pairs of adjacent features.
     idealized_vertices: (N, 3) the input vertices moved onto their features' surfaces; the
         triangles are the input's. deviation: {"max", "rms"} distance of the input vertices from
         the surfaces of their features; vertex_deviation: (N,) that distance per vertex (NaN where
-        only freeform features touch it).
+        only freeform features touch it). form_deviation: how far the mesh departs from its fitted
+        surfaces other than by independent noise (a sculpted part's undulation; about 0 on a scan).
     segmentation: the :class:`idealize.Segmentation` the layer was built from (None for a layer
         restored from a document object).
     mesh_check: the segmentation's mesh checks (dict, see :class:`idealize.Segmentation`), None
@@ -46,6 +49,7 @@ class FeatureLayer:
         self.vertex_deviation = result["vertex_deviation"]
         self.deviation = {"max": result["max_deviation"], "rms": result["rms_deviation"]}
         self.distance_tolerance = result["distance_tolerance"]
+        self.form_deviation = result.get("form_deviation")  # None from a layer stored without it
         self.mesh_check = segmentation.mesh_check if segmentation is not None else None
         # The input's triangles with the orientation repair applied (the input's own when none).
         self.oriented_faces = segmentation.oriented_faces(mesh.faces) if segmentation is not None else mesh.faces

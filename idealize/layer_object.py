@@ -184,6 +184,7 @@ class LayerRecord:
         self.table = json.dumps(_jsonable({
             "features": layer.features, "adjacency": layer.adjacency, "relations": layer.relations,
             "deviation": layer.deviation, "distance_tolerance": layer.distance_tolerance,
+            "form_deviation": layer.form_deviation,
             "mesh_check": layer.mesh_check}))
         self.vertex_deviation = np.asarray(layer.vertex_deviation, dtype=np.float64).tolist()
         self.fingerprint = fingerprint(layer.mesh, options)
@@ -310,7 +311,8 @@ def feature_layer(obj):
         "relations": table["relations"], "idealized_vertices": idealized.vertices,
         "vertex_deviation": np.asarray(obj.VertexDeviation, dtype=np.float64),
         "max_deviation": table["deviation"]["max"], "rms_deviation": table["deviation"]["rms"],
-        "distance_tolerance": table["distance_tolerance"], "timings": []})
+        "distance_tolerance": table["distance_tolerance"], "form_deviation": table.get("form_deviation"),
+        "timings": []})
     layer.mesh_check = table.get("mesh_check")
     layer.oriented_faces = idealized.faces  # stored with the orientation repair
     return layer

@@ -986,6 +986,75 @@ def test_equal_radii_of_the_benchmarks_sculpted_plate():
     assert any(holes <= g for g in groups), (holes, groups)
 
 
+def radius_groups(layer, features):
+    """The equal-radius groups that hold any of `features` (ids), as sets."""
+    groups = [set(r["features"]) for r in layer.relations if r["kind"] == "equal_radius"]
+    return [g for g in groups if g & set(features)]
+
+
+@needs_freecad
+def test_fillets_apart_by_less_than_the_tolerance_are_two_radii_when_their_fits_tell_them_apart():
+    """A 400 mm bar (distance tolerance 0.41 mm) whose top edges are rounded with r 3.2 and bottom
+    edges with r 3.6: the radii differ by less than the tolerance, but exact fits tell them apart."""
+    FreeCAD, Part, _ = shapes.freecad()
+    bar = Part.makeBox(400, 60, 40)
+    along = [e for e in bar.Edges if abs(e.Vertexes[0].Point.x - e.Vertexes[-1].Point.x) > 399]
+    top = [e for e in along if e.Vertexes[0].Point.z > 39]
+    bar = bar.makeFillet(3.2, top)
+    bottom = [e for e in bar.Edges if abs(e.Vertexes[0].Point.x - e.Vertexes[-1].Point.x) > 399
+              and e.Vertexes[0].Point.z < 1 and e.Curve.__class__.__name__ == "Line"]
+    bar = bar.makeFillet(3.6, bottom)
+    V, F, gt = shapes.tessellate_with_faces(bar, 0.05)
+    layer = idealize.idealize(idealize.Mesh(V, F))
+    assert layer.distance_tolerance > 0.4
+    found = dominant(layer, gt, shapes.triangle_areas(V, F))
+    fillets = {r: {found[i]["id"] for i, face in enumerate(bar.Faces)
+                   if type(face.Surface).__name__ == "Cylinder" and abs(face.Surface.Radius - r) < 1e-6}
+               for r in (3.2, 3.6)}
+    assert all(len(ids) == 2 for ids in fillets.values()), fillets
+    assert radius_groups(layer, fillets[3.2]) == [fillets[3.2]]
+    assert radius_groups(layer, fillets[3.6]) == [fillets[3.6]]
+    for f in layer.features:
+        if f["id"] in fillets[3.2] | fillets[3.6]:
+            assert f["params"]["radius"] == pytest.approx(3.2 if f["id"] in fillets[3.2] else 3.6, rel=1e-4)
+
+
+@needs_freecad
+def test_form_deviation_sees_undulation_and_not_noise():
+    """A scan's noise does not correlate between neighbouring vertices; a sculpted part's undulation
+    does, and moves whole features off their ideal surfaces: form_deviation measures that."""
+    V, F, _, diagonal = shapes.uniform_remesh(shapes.bracket_solid(), 20000)
+    noisy = idealize.idealize(idealize.Mesh(shapes.normal_noise(V, F, diagonal, seed=3), F))
+    assert noisy.form_deviation < 0.2e-3 * diagonal  # the noise is 1e-3 x diagonal
+    normals = idealize.vertex_curvature(idealize.Mesh(V, F))["normal"]
+    wave = 2 * np.pi / diagonal * np.array([1.0, 0.6, 0.3])
+    amplitude = 2e-3 * diagonal
+    undulating = idealize.idealize(idealize.Mesh(V + normals * (amplitude * np.sin(V @ wave))[:, None], F))
+    assert undulating.form_deviation > 0.1 * amplitude
+    assert undulating.form_deviation > 5 * noisy.form_deviation
+
+
+@needs_freecad
+@shapes.needs_shared_data
+def test_fillets_of_two_radii_in_the_benchmarks_scan_stay_two_radii():
+    """The benchmark's scan of nist_ftc_06 (noise 0.40 mm, the distance tolerance): its fillets of
+    3.175 and 3.569 mm differ by less than the tolerance, but the hundreds of points of its long
+    fillets tell the radii apart. (They were one group, its radius 3.08 for all of them.)"""
+    m = shapes.benchmark_mesh("nist_ftc_06_asme1_rd.stp", "scan")
+    part = shapes.shared_part("nist_ftc_06_asme1_rd.stp")
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    found = dominant(layer, m.gt, shapes.triangle_areas(m.V, m.F))
+    def fillets(radius):
+        return {f["id"] for face, f in zip(part.Faces, found) if f is not None and f["type"] == "cylinder"
+                and f["params"]["radius"] < 5
+                and type(face.Surface).__name__ == "Cylinder" and abs(face.Surface.Radius - radius) < 1e-3}
+    small, large = fillets(3.175), fillets(3.5687)
+    assert len(small) >= 4 and len(large) >= 4
+    for group in radius_groups(layer, small | large):
+        assert len(group & small) <= 1 or len(group & large) <= 1, (group, small, large)
+    assert any(len(g & large) >= 3 for g in radius_groups(layer, large))
+
+
 @needs_freecad
 @shapes.needs_shared_data
 def test_fillet_strips_between_planes_of_the_benchmarks_scan_are_cylinders():

@@ -184,6 +184,7 @@ py::dict feature_layer_dict(FeatureLayer&& layer) {
     d["normal_rms"] = f.normal_rms;
     d["spread"] = f.spread;
     d["normal_spread"] = f.normal_spread;
+    d["radius_error"] = f.radius_error;
     d["area"] = f.area;
     d["triangles"] = f.triangles;
     d["fit_vertices"] = f.vertices;
@@ -218,6 +219,7 @@ py::dict feature_layer_dict(FeatureLayer&& layer) {
   d["max_deviation"] = layer.max_deviation;
   d["rms_deviation"] = layer.rms_deviation;
   d["distance_tolerance"] = layer.distance_tolerance;
+  d["form_deviation"] = layer.form_deviation;
   d["timings"] = timings;
   return d;
 }

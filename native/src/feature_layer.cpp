@@ -1998,6 +1998,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   progress.sub("relations", 0.98, 0.99).step(0.0);
 
   const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
+  layer.form_deviation = form_deviation(mesh, layer.labels, layer.features);
+  measure_radius_errors(mesh, layer.labels, layer.form_deviation, layer.features);
   build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,
                       options.radius_tolerance, layer.adjacency, layer.relations);
   // On an exact tessellation a sphere band one facet row wide is a cone as much: any two coaxial

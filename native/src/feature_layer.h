@@ -96,6 +96,7 @@ struct Feature {
   double max_error = 0.0;
   double normal_rms = 0.0;   // RMS angle (radians) between vertex and surface normals
   double spread = 0.0, normal_spread = 0.0;  // their robust counterparts (SurfaceFit)
+  double radius_error = 0.0;  // standard error of the tube radius (measure_radius_errors)
   double area = 0.0;
   int triangles = 0;
   int vertices = 0;          // vertices the fit used
@@ -130,6 +131,7 @@ struct FeatureLayer {
   double max_deviation = 0.0;    // largest distance of an input vertex from its nearest feature surface
   double rms_deviation = 0.0;
   double distance_tolerance = 0.0;  // the one used
+  double form_deviation = 0.0;  // of the mesh from the fitted surfaces beyond noise (feature_graph.h)
   std::vector<std::pair<std::string, double>> timings;
 };
 

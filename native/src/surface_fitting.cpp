@@ -416,6 +416,64 @@ void measure_spreads(const FitData& data, SurfaceFit& fit) {
   fit.normal_spread = 1.4826 * weighted_median(std::move(angle));
 }
 
+// sigma times the square root of the radius's diagonal entry of (J^T J)^-1, J the derivatives of
+// the points' distances by the surface's parameters (the Gauss-Newton covariance of the fit), on an
+// even subsample whose J^T J grows by its stride to that of all points.
+double tube_radius_error(const Surface& surface, const MatrixX3d& points) {
+  int radius_index = -1;  // of the radius among perturbed()'s parameters
+  switch (surface.type) {
+    case SurfaceType::Sphere: radius_index = 3; break;
+    case SurfaceType::Cylinder: radius_index = 4; break;
+    case SurfaceType::Torus: radius_index = 6; break;
+    default: return 0.0;
+  }
+  const int k = parameter_count(surface.type);
+  const Eigen::Index stride = std::max<Eigen::Index>(1, points.rows() / kStatisticsPoints);
+  std::vector<Eigen::Vector3d> p;
+  for (Eigen::Index i = 0; i < points.rows(); i += stride) p.push_back(points.row(i).transpose());
+  const int n = static_cast<int>(p.size());
+  if (n <= k) return std::numeric_limits<double>::infinity();
+  // In the frame of the points' centre and spread, where the finite differences are well scaled;
+  // a distance's derivative by the radius is the same in both frames.
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& q : p) centre += q / n;
+  double scale = 0.0;
+  for (Eigen::Vector3d& q : p) {
+    q -= centre;
+    scale += q.squaredNorm() / n;
+  }
+  scale = std::sqrt(scale);
+  if (!(scale > 0.0)) return std::numeric_limits<double>::infinity();
+  for (Eigen::Vector3d& q : p) q /= scale;
+  Surface local = to_local(surface, centre, scale);
+  // A cylinder's axis tilts about its point: the one nearest the points, or the tilt would move
+  // them as much as a shift does and the two would not be told apart.
+  if (local.type == SurfaceType::Cylinder) local.point -= local.point.dot(local.axis) * local.axis;
+  constexpr double kStep = 1e-5;  // central differences
+  std::vector<double> ahead(n), behind(n);
+  Eigen::MatrixXd jacobian(n, k);
+  for (int j = 0; j < k; ++j) {
+    double step[7] = {0, 0, 0, 0, 0, 0, 0};
+    step[j] = kStep;
+    signed_distances(perturbed(local, step), p.data(), n, ahead.data());
+    step[j] = -kStep;
+    signed_distances(perturbed(local, step), p.data(), n, behind.data());
+    for (int i = 0; i < n; ++i) jacobian(i, j) = (ahead[i] - behind[i]) / (2 * kStep);
+  }
+  std::vector<double> distance(n);
+  signed_distances(local, p.data(), n, distance.data());
+  for (double& x : distance) x = std::abs(x);
+  std::nth_element(distance.begin(), distance.begin() + n / 2, distance.end());
+  const double sigma = 1.4826 * distance[n / 2] * scale;
+  const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
+  const Eigen::LDLT<Eigen::MatrixXd> solver(normal);
+  const Eigen::VectorXd column = solver.solve(Eigen::VectorXd::Unit(k, radius_index));
+  const double variance = column[radius_index];
+  if (solver.info() != Eigen::Success || !std::isfinite(variance) || !(variance > 0.0))
+    return std::numeric_limits<double>::infinity();
+  return sigma * std::sqrt(variance / stride);
+}
+
 FitData concatenate(const FitData& a, const FitData& b) {
   FitData out;
   out.points.resize(a.points.rows() + b.points.rows(), 3);

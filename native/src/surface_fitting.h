@@ -77,6 +77,12 @@ SurfaceFit fit_about_axis(SurfaceType type, const FitData& data, const Eigen::Ve
 // The fit's normal RMS angle and robust spreads over `data` (fit_surface measures them).
 void measure_spreads(const FitData& data, SurfaceFit& fit);
 
+// How well `points` (#P x 3) determine the tube radius of `surface` (a cylinder's or sphere's
+// radius, a torus's minor radius; 0 for other types): the standard error of the radius of the
+// least-squares fit at `surface`, for points that scatter independently by their robust spread
+// from it. Infinite where the points do not determine it (fewer than the surface's parameters).
+double tube_radius_error(const Surface& surface, const MatrixX3d& points);
+
 // The weighted median of (value, weight) pairs (0 for none).
 double weighted_median(std::vector<std::pair<double, double>> values);
 
