@@ -31,6 +31,7 @@ def build_report(mesh, layer, timings, step, solid=None):
                        "angle": float(e["angle"]), "length": float(e["length"])} for e in layer.adjacency],
         "relations": [{"kind": r["kind"], "features": [int(i) for i in r["features"]]} for r in layer.relations],
         "deviation": {"max": float(layer.deviation["max"]), "rms": float(layer.deviation["rms"])},
+        "form_deviation": float(layer.form_deviation),
         "tolerances": {"distance": float(layer.distance_tolerance)},
         "timings": {name: round(float(seconds), 6) for name, seconds in timings.items()},
         "step": step,
@@ -41,7 +42,7 @@ def build_report(mesh, layer, timings, step, solid=None):
 
 
 def _feature(feature):
-    return {
+    out = {
         "id": int(feature["id"]),
         "type": feature["type"],
         "params": {key: _plain(value) for key, value in feature["params"].items()},
@@ -53,6 +54,10 @@ def _feature(feature):
         "curvature_type": feature["curvature_type"],
         "curvature": {key: float(value) for key, value in feature["curvature"].items()},
     }
+    if feature["type"] in ("cylinder", "sphere", "torus"):  # null where the points do not fix the radius
+        error = float(feature["radius_error"])
+        out["radius_error"] = error if np.isfinite(error) else None
+    return out
 
 
 def _plain_check(value):

@@ -118,6 +118,10 @@ def test_bracket_report_features_graph_and_relations(tmp_path):
             assert pair == {"plane", "cylinder"}
     assert sum(e["continuity"] == "G1" for e in report["adjacency"]) >= 4
     assert report["deviation"]["max"] < 1e-3 and report["deviation"]["rms"] <= report["deviation"]["max"]
+    # Exact fits: radii fixed to far below the tolerance, a form that does not depart from them.
+    assert all(0.0 <= f["radius_error"] < 1e-3 for f in features if f["type"] == "cylinder")
+    assert all("radius_error" not in f for f in features if f["type"] == "plane")
+    assert 0.0 <= report["form_deviation"] < 1e-4
 
 
 def test_bad_input_exits_with_message(tmp_path):
