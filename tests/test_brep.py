@@ -925,6 +925,33 @@ def test_scan_of_coaxial_blends_closes():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_faces_whose_fitted_edges_stray_from_their_surface_are_left_out_and_named():
+    """The benchmark's scan of as_ANC101 does not close: where the surfaces on either side of a
+    boundary do not meet near it, the B-spline fitted to the boundary lies off them (its pcurve,
+    its projection on the face's surface, ten tolerances or more from it; on the 75k-triangle scan
+    of nist_ftc_06 up to 34 mm on a part of 405, checked edge by edge in most of the B-rep's
+    time). Such a face does not follow its boundary: it is left out and named (before, it was kept
+    or failed later without saying why). The fitted edges of the faces kept stay within a few tens
+    of the distance tolerance."""
+    m = shapes.benchmark_mesh("as_ANC101.stp", "scan")
+    layer = idealize.idealize(Mesh(m.V, m.F))
+    solid = idealize.make_solid(layer)
+    assert not solid.solid and solid.valid
+    stray = {feature for feature, message in solid.problems if "does not follow its boundary" in message}
+    assert stray and not stray & set(solid.face_features)
+
+    def fitted(edge):
+        try:
+            return type(edge.Curve).__name__ == "BSplineCurve"
+        except TypeError:  # a degenerate edge
+            return False
+
+    tolerances = [e.Tolerance for e in solid.part_shape().Edges if fitted(e)]
+    assert tolerances and max(tolerances) < 30 * layer.distance_tolerance
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_faces_of_a_shell_that_does_not_close_pass_the_boolean_checks():
     """The benchmark's scan of as_3boxesblend_05 does not close (nor did as_bb_boxblend_03's, which this
     test used until it closed). Some of its faces are bounded by edges that cross each other or leave

@@ -1057,6 +1057,25 @@ def test_fillets_of_two_radii_in_the_benchmarks_scan_stay_two_radii():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_small_ball_between_fillets_of_the_benchmarks_scan_is_a_sphere():
+    """The benchmark's scan of as_3boxesblend_05: a ball of r 0.1 (48 facets) where three fillets of
+    its radius meet (thesis 4.3, case 2). A cylinder across the corner fits its few noisy points as
+    well as the sphere; the sphere touching the three fillets is the ball."""
+    m = shapes.benchmark_mesh("as_3boxesblend_05.step", "scan")
+    part = shapes.shared_part("as_3boxesblend_05.step")
+    layer = idealize.idealize(idealize.Mesh(m.V, m.F))
+    found = dominant(layer, m.gt, shapes.triangle_areas(m.V, m.F))
+    (ball,) = [i for i, face in enumerate(part.Faces)
+               if type(face.Surface).__name__ == "Sphere" and abs(face.Surface.Radius - 0.1) < 1e-6]
+    feature = found[ball]
+    assert feature["type"] == "sphere", feature
+    assert feature["params"]["radius"] == pytest.approx(0.1, rel=0.03)
+    centre = part.Faces[ball].Surface.Center
+    assert np.linalg.norm(np.array(feature["params"]["center"]) - (centre.x, centre.y, centre.z)) < 0.005
+
+
+@needs_freecad
+@shapes.needs_shared_data
 def test_fillet_strips_between_planes_of_the_benchmarks_scan_are_cylinders():
     """The benchmark's scan of as_bb_boxblend_03 (rounded edges of r 5.08, 44 times the noise): across
     the middle of such a fillet its sag hides in the noise, so a plane fits the strip there as well as

@@ -5,6 +5,7 @@
 #include "occt_signals.h"
 #include "parallel.h"
 
+#include <BRepAdaptor_Curve.hxx>
 #include <BRepAdaptor_Surface.hxx>
 #include <BOPAlgo_ArgumentAnalyzer.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
@@ -1719,6 +1720,34 @@ int BrepBuilder::region_of(const TopoDS_Face& face) const {
   return -1;
 }
 
+namespace {
+
+// A fitted edge (a B-spline through the mesh's border between two features) whose 3D curve and
+// pcurve lie this many tolerances apart bounds no face of its surface. (An exact circle on a
+// sphere that is no parallel may have its approximated pcurve as far off: its tolerance covers it.)
+constexpr double kStrayEdge = 10.0;
+
+// The largest distance between a B-spline edge's 3D curve and its curve on `face`, at 33
+// parameters: a lower bound of BRepLib_CheckCurveOnSurface's, at a small part of its cost. 0 for
+// other edges and without the curves.
+double sampled_pcurve_gap(const TopoDS_Edge& edge, const TopoDS_Face& face) {
+  double first, last;
+  const Handle(Geom_Curve) curve = BRep_Tool::Curve(edge, first, last);
+  if (curve.IsNull() || !curve->IsKind(STANDARD_TYPE(Geom_BSplineCurve)) ||
+      BRep_Tool::CurveOnSurface(edge, face, first, last).IsNull())
+    return 0.0;
+  const BRepAdaptor_Curve in_space(edge), on_face(edge, face);
+  constexpr int kSamples = 32;
+  double gap = 0.0;
+  for (int i = 0; i <= kSamples; ++i) {
+    const double t = first + (last - first) * i / kSamples;
+    gap = std::max(gap, in_space.Value(t).Distance(on_face.Value(t)));
+  }
+  return gap;
+}
+
+}  // namespace
+
 TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& options,
                                    std::vector<std::string>& closed_faults) {
   // Each face that needs it is healed on its own (pcurves shifted into one period, seams of
@@ -1735,31 +1764,49 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   // An edge's tolerance must cover its pcurves too: a circle on a sphere that is no parallel (a
   // ball corner's rim) gets an approximated pcurve that strays from the circle by more than the
   // exact circle's tolerance, which BRepCheck accepts and the boolean operations' check does not.
-  // The checks only read the faces (on two threads); the tolerances are raised in face order.
+  // The checks only read the faces (on two threads, edge by edge: a few B-spline edges of a scan
+  // that does not close take most of the time); the tolerances are raised in face order.
   const int face_count = static_cast<int>(faces_.size());
-  std::vector<std::vector<std::pair<TopoDS_Edge, double>>> pcurve_gaps(face_count);
-  on_two_threads_as_free(face_count, [&](int i) {
-    for (TopExp_Explorer e(faces_[i], TopAbs_EDGE); e.More(); e.Next()) {
-      const TopoDS_Edge& edge = TopoDS::Edge(e.Current());
-      try {
-        OCC_CATCH_SIGNALS
-        BRepLib_CheckCurveOnSurface check(edge, faces_[i]);
-        check.Perform();
-        // (A distance beyond the part's size is the check failing: no tolerance to take from it.)
-        if (check.IsDone() && check.MaxDistance() <= diagonal_) pcurve_gaps[i].emplace_back(edge, check.MaxDistance());
-      } catch (const Standard_Failure&) {
-      }
+  struct PcurveGap {
+    int face;
+    TopoDS_Edge edge;
+    double gap = -1.0;   // none measured
+    bool stray = false;  // its curves lie kStrayEdge tolerances apart or more
+  };
+  std::vector<PcurveGap> pcurve_gaps;
+  for (int i = 0; i < face_count; ++i)
+    for (TopExp_Explorer e(faces_[i], TopAbs_EDGE); e.More(); e.Next()) pcurve_gaps.push_back({i, TopoDS::Edge(e.Current())});
+  on_two_threads_as_free(static_cast<int>(pcurve_gaps.size()), [&](int k) {
+    PcurveGap& g = pcurve_gaps[k];
+    try {
+      OCC_CATCH_SIGNALS
+      g.stray = sampled_pcurve_gap(g.edge, faces_[g.face]) >= kStrayEdge * tol_;
+      if (g.stray) return;
+      BRepLib_CheckCurveOnSurface check(g.edge, faces_[g.face]);
+      check.Perform();
+      // (A distance beyond the part's size is the check failing: no tolerance to take from it.)
+      if (check.IsDone() && check.MaxDistance() <= diagonal_) g.gap = check.MaxDistance();
+    } catch (const Standard_Failure&) {
     }
   });
+  // A face whose boundary strays that far from its surface does not follow it: where the surfaces on
+  // either side of an edge do not meet near the mesh's border between them (a scan that does not
+  // close), the edge fitted to that border lies off them. It is left out, and said so.
+  std::vector<char> stray(face_count, 0);
+  for (const PcurveGap& g : pcurve_gaps) stray[g.face] |= g.stray;
+  for (int i = 0; i < face_count; ++i)
+    if (stray[i])
+      result.problems.push_back({topo_.region_feature[face_region_[i]],
+                                 "its face does not follow its boundary (an edge lies more than " +
+                                     std::to_string(static_cast<int>(kStrayEdge)) +
+                                     " tolerances off its surface): left out"});
   BRep_Builder tolerances;
-  for (const auto& gaps : pcurve_gaps) {
-    for (const auto& [edge, gap] : gaps) {
-      if (!(gap > BRep_Tool::Tolerance(edge))) continue;
-      const double tolerance = 1.01 * gap;
-      tolerances.UpdateEdge(edge, tolerance);
-      for (TopExp_Explorer v(edge, TopAbs_VERTEX); v.More(); v.Next())
-        tolerances.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
-    }
+  for (const PcurveGap& g : pcurve_gaps) {
+    if (!(g.gap > BRep_Tool::Tolerance(g.edge))) continue;
+    const double tolerance = 1.01 * g.gap;
+    tolerances.UpdateEdge(g.edge, tolerance);
+    for (TopExp_Explorer v(g.edge, TopAbs_VERTEX); v.More(); v.Next())
+      tolerances.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
   }
   for (const TopoDS_Face& face : faces_) {
     try {
@@ -1783,6 +1830,7 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   const ProgressSpan progress = progress_.sub("sewing", 0.83, 0.9);
   for (int i = 0; i < face_count; ++i) {
     progress.sub(0.0, 0.5).step(static_cast<double>(i) / face_count);
+    if (stray[i]) continue;
     if (sound[i]) {
       sewing.Add(faces_[i]);
       continue;

@@ -351,6 +351,50 @@ std::vector<std::pair<int, int>> adjacent_pairs(const TriangleMesh& mesh, const 
 }
 
 
+// A small ball where fillets meet (thesis 4.3, case 2) fits a cylinder about as well as a sphere on
+// a noisy mesh, and identification takes the simpler cylinder (as_3boxesblend_05's scan: a ball of
+// r 0.1, 48 facets, between three fillets, fitted by a cylinder of r 0.12 across the corner). A
+// cylinder beside two or more cylinders of one radius whose axes are not parallel and pass within
+// the distance tolerance of one point is that ball, where the sphere about the point with their
+// radius, which touches them all, fits its points as well as its cylinder (within the residual
+// ratio).
+void make_balls_of_corner_cylinders(const TriangleMesh& mesh, const MeshTopology& topology, double angle_tolerance,
+                                    double distance_tolerance, const FeatureOptions& options,
+                                    const std::vector<int>& labels, std::vector<Feature>& features) {
+  std::vector<std::vector<int>> beside(features.size());
+  for (const auto& [a, b] : adjacent_pairs(mesh, topology, labels)) {
+    beside[a].push_back(b);
+    beside[b].push_back(a);
+  }
+  std::vector<PatchPoints> points;  // made for the first candidate
+  for (Feature& f : features) {
+    if (f.type != SurfaceType::Cylinder) continue;
+    std::vector<const Surface*> fillets;
+    for (int n : beside[f.id])
+      if (features[n].type == SurfaceType::Cylinder) fillets.push_back(&features[n].surface);
+    if (fillets.size() < 2) continue;
+    const AxesMeeting meeting = point_nearest_to_axes(fillets);
+    if (!(meeting.fixed > 1.0 - std::cos(angle_tolerance))) continue;  // parallel within the tolerance
+    const Eigen::Vector3d& centre = meeting.point;
+    double radius = 0.0;
+    for (const Surface* c : fillets) radius += c->radius / fillets.size();
+    const double near = std::max(distance_tolerance, options.radius_tolerance * radius);
+    if (!std::all_of(fillets.begin(), fillets.end(), [&](const Surface* c) {
+          return axial_coordinates(c->point, c->axis, centre).distance <= near && std::abs(c->radius - radius) <= near;
+        }))
+      continue;
+    if (points.empty()) points = patch_points(mesh, labels, static_cast<int>(features.size()));
+    Surface ball;
+    ball.type = SurfaceType::Sphere;
+    ball.point = centre;
+    ball.radius = radius;
+    SurfaceFit fit = fit_of(ball, points[f.id]);
+    if (!(fit.rms <= options.residual_ratio * fit_of(f.surface, points[f.id]).rms)) continue;
+    measure_spreads(points[f.id], fit);
+    f.set_fit(fit);
+  }
+}
+
 // Distinct points of `data` (pieces share their rim vertices).
 int distinct_points(const PatchPoints& data) {
   std::set<std::array<double, 3>> seen;
@@ -1998,6 +2042,8 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   progress.sub("relations", 0.98, 0.99).step(0.0);
 
   const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
+  make_balls_of_corner_cylinders(mesh, topology, angle_tolerance, layer.distance_tolerance, options, layer.labels,
+                                 layer.features);
   layer.form_deviation = form_deviation(mesh, layer.labels, layer.features);
   measure_radius_errors(mesh, layer.labels, layer.form_deviation, layer.features);
   build_feature_graph(mesh, topology, layer.labels, layer.features, angle_tolerance, layer.distance_tolerance,

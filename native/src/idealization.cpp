@@ -513,21 +513,13 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
     if (sphere.type != SurfaceType::Sphere) continue;
     const std::vector<const Surface*> cylinders = tangent_surfaces(sphere.id, SurfaceType::Cylinder, relations, features);
     if (cylinders.empty()) continue;
-    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
     double radius = 0.0;
-    for (const Surface* c : cylinders) {
-      const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - c->axis * c->axis.transpose();
-      normal += across;
-      rhs += across * c->point;
-      radius += c->radius / cylinders.size();
-    }
+    for (const Surface* c : cylinders) radius += c->radius / cylinders.size();
     // Along a single axis (or nearly parallel ones, within 8°) the sphere keeps its place.
     Eigen::Vector3d& centre = sphere.surface.point;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(normal);
-    if (solver.eigenvalues()[0] > 1e-2) {
-      centre = solver.eigenvectors() * solver.eigenvalues().cwiseInverse().asDiagonal() *
-               solver.eigenvectors().transpose() * rhs;
+    const AxesMeeting meeting = point_nearest_to_axes(cylinders);
+    if (meeting.fixed > 1e-2) {
+      centre = meeting.point;
     } else {
       const Surface& c = *cylinders.front();
       centre = c.point + (centre - c.point).dot(c.axis) * c.axis;

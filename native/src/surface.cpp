@@ -1,5 +1,6 @@
 #include "surface.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -201,6 +202,23 @@ Eigen::Vector3d closest_point(const Surface& s, const Eigen::Vector3d& p) {
     case SurfaceType::Freeform: return p;
     default: return p - signed_distance(s, p) * surface_normal(s, p);
   }
+}
+
+AxesMeeting point_nearest_to_axes(const std::vector<const Surface*>& surfaces) {
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (const Surface* s : surfaces) {
+    const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - s->axis * s->axis.transpose();
+    normal += across;
+    rhs += across * s->point;
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(normal);
+  AxesMeeting out;
+  out.fixed = solver.eigenvalues()[0];
+  if (out.fixed > 0.0)
+    out.point = solver.eigenvectors() * solver.eigenvalues().cwiseInverse().asDiagonal() *
+                solver.eigenvectors().transpose() * rhs;
+  return out;
 }
 
 }  // namespace idealize

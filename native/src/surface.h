@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <vector>
 
 namespace idealize {
 
@@ -82,5 +83,15 @@ inline AxialCoordinates axial_coordinates(const Eigen::Vector3d& origin, const E
   }
   return c;
 }
+
+// The point nearest, in least squares, to the axes of `surfaces` (where fillets' axes meet, about
+// which the ball between them is centred), and how well they fix it: the smallest eigenvalue of the
+// normal matrix, the sum of (I - a a^T), which is 1 - cos t for two axes at an angle t and 0 for
+// parallel axes (then `point` is not defined).
+struct AxesMeeting {
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  double fixed = 0.0;
+};
+AxesMeeting point_nearest_to_axes(const std::vector<const Surface*>& surfaces);
 
 }  // namespace idealize
