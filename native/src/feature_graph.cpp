@@ -137,37 +137,12 @@ std::vector<Eigen::Vector3d> feature_centroids(const TriangleMesh& mesh, const s
 
 double tube_radius(const Feature& f) { return f.type == SurfaceType::Torus ? f.surface.minor : f.surface.radius; }
 
-// The vertices of each feature's triangles.
-std::vector<std::vector<int>> feature_vertices(const TriangleMesh& mesh, const std::vector<int>& labels, size_t count) {
-  std::vector<std::vector<int>> vertices(count);
-  std::vector<int> owner(mesh.num_vertices(), -1);
-  std::vector<std::vector<int>> faces(count);
-  for (size_t f = 0; f < labels.size(); ++f)
-    if (labels[f] >= 0 && static_cast<size_t>(labels[f]) < count) faces[labels[f]].push_back(static_cast<int>(f));
-  for (size_t m = 0; m < count; ++m)
-    for (int f : faces[m])
-      for (int k = 0; k < 3; ++k)
-        if (owner[mesh.F(f, k)] != static_cast<int>(m)) {
-          owner[mesh.F(f, k)] = static_cast<int>(m);
-          vertices[m].push_back(mesh.F(f, k));
-        }
-  return vertices;
-}
-
-MatrixX3d rows(const TriangleMesh& mesh, const std::vector<int>& vertices) {
-  MatrixX3d points(vertices.size(), 3);
-  for (size_t i = 0; i < vertices.size(); ++i) points.row(i) = mesh.V.row(vertices[i]);
-  return points;
-}
-
 }  // namespace
 
-void measure_radius_errors(const TriangleMesh& mesh, const std::vector<int>& labels, double departure,
-                           std::vector<Feature>& features) {
-  const std::vector<std::vector<int>> vertices = feature_vertices(mesh, labels, features.size());
+void measure_radius_errors(const std::vector<FitData>& points, double departure, std::vector<Feature>& features) {
   for (Feature& f : features) {
     if (f.type != SurfaceType::Cylinder && f.type != SurfaceType::Sphere && f.type != SurfaceType::Torus) continue;
-    f.radius_error = std::hypot(tube_radius_error(f.surface, rows(mesh, vertices[f.id])), departure);
+    f.radius_error = std::hypot(tube_radius_error(f.surface, points[f.id].points), departure);
   }
 }
 

@@ -21,11 +21,11 @@ void build_feature_graph(const TriangleMesh& mesh, const MeshTopology& topology,
                          std::vector<FeatureRelation>& relations);
 
 // Sets the radius_error of the features with a tube radius (cylinders, spheres, tori): the standard
-// error of the radius fitted to the vertices of the feature's triangles (tube_radius_error), with
-// the part's `departure` from its surfaces (form_deviation), which moves each radius as a whole.
-// Of fitted surfaces (ideal ones were moved off their points on purpose).
-void measure_radius_errors(const TriangleMesh& mesh, const std::vector<int>& labels, double departure,
-                           std::vector<Feature>& features);
+// error of the radius fitted to `points` (by feature id: every vertex of the feature's triangles,
+// FitData::points; tube_radius_error), with the part's `departure` from its surfaces
+// (form_deviation), which moves each radius as a whole. Of fitted surfaces (ideal ones were moved
+// off their points on purpose).
+void measure_radius_errors(const std::vector<FitData>& points, double departure, std::vector<Feature>& features);
 
 // How far a mesh departs from its features' surfaces other than by independent noise, as a
 // sculpted part's undulation does (which moves a fillet's fitted radius as a whole, where noise
