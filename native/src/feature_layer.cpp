@@ -1097,9 +1097,17 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
       const double as_well = std::min(fits_below, disc_rms + noise);
       const SurfaceFit straight = fit_surface(SurfaceType::Cylinder, wider_points, fit_options, &feature.surface);
       if (straight.valid && straight.rms <= disc_rms + noise) return false;
-      const SurfaceFit torus = fit_surface(SurfaceType::Torus, wider_points, fit_options);
-      if (!torus.valid || torus.rms > as_well || torus.surface.radius < torus.surface.minor ||
-          std::abs(torus.surface.axis.dot(feature.surface.axis)) > std::sqrt(0.5))
+      // A cone about the cylinder's axis first (fewer parameters): a cylinder grown on a narrow
+      // cone tilts by its half-angle and takes half of it.
+      const SurfaceFit cone = fit_surface(SurfaceType::Cone, wider_points, fit_options);
+      const SurfaceFit torus = cone.valid && cone.rms <= as_well &&
+                                       std::abs(cone.surface.axis.dot(feature.surface.axis)) > std::sqrt(0.5)
+                                   ? cone
+                                   : fit_surface(SurfaceType::Torus, wider_points, fit_options);
+      if (!torus.valid || torus.rms > as_well ||
+          (torus.surface.type == SurfaceType::Torus &&
+           (torus.surface.radius < torus.surface.minor ||
+            std::abs(torus.surface.axis.dot(feature.surface.axis)) > std::sqrt(0.5))))
         return false;
       feature.set_fit(torus);
       fitting = feature;
