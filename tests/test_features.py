@@ -1298,6 +1298,25 @@ def test_sectors_of_one_surface_that_cylinders_fitted_merge():
 
 @needs_freecad
 @shapes.needs_shared_data
+def test_cylinder_grown_on_a_slender_cone_grows_on_as_the_cone():
+    """On the benchmark's scanned nist_ftc_06 the same slender cone (half-angle 9.5°) and the
+    cylinder beside it are one patch that no surface fits. Split by growing surfaces, a cylinder
+    grown from a disc on the cone tilts by the half-angle and takes half of it; where a cone about
+    the cylinder's axis fits the region and as many faces again beyond it, it grows on as that cone:
+    the cone face is one cone feature (before: two tilted cylinders, each with part of the cylinder)."""
+    _, layer, truth, score = benchmark_surface_score("nist_ftc_06_asme1_rd.stp", "scan")
+    surface_of = shapes.bench_module("ground_truth").surface_of_face(truth)
+    cones = [surface_of[i] for i, face in enumerate(truth["faces"])
+             if face["type"] == "cone" and abs(face["params"]["half_angle"] - 0.1651) < 1e-3]
+    entries = [e for e in score["per_face"] if e["face"] in cones]
+    assert entries and all(e["status"] == "correct" for e in entries), entries
+    for e in entries:
+        feature = layer.features[e["best_patch"]]
+        assert feature["type"] == "cone" and abs(feature["params"]["half_angle"] - 0.1651) < np.radians(1), feature
+
+
+@needs_freecad
+@shapes.needs_shared_data
 @pytest.mark.parametrize("name, faces", [("as_customblend_05.step", [14, 16]), ("occt_Pump_Nut.step", [24])])
 def test_revolved_fillets_of_sculpted_parts_beside_other_blends(name, faces):
     """On the benchmark's sculpted as_customblend_05 and occt_Pump_Nut, a narrow torus fillet between
