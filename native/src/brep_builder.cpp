@@ -1392,11 +1392,30 @@ void BrepBuilder::make_edges(BrepResult& result) {
   }
 }
 
+// Whether an edge of `shape` spans no parameter range on a face it bounds. BRepTools_WireExplorer,
+// which BRepCheck runs on every wire, steps along an edge's pcurve from its end by a thousandth of
+// its range until it leaves the end's point: below the parameter's rounding the step adds nothing,
+// and the check never returns (OCCT 7.6). Healing left such an edge, flagged degenerated, on a
+// plane of a scan's sewn shell.
+bool has_vanishing_edge(const TopoDS_Shape& shape) {
+  for (TopExp_Explorer f(shape, TopAbs_FACE); f.More(); f.Next()) {
+    const TopoDS_Face& face = TopoDS::Face(f.Current());
+    for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) {
+      double first, last;
+      if (!BRep_Tool::CurveOnSurface(TopoDS::Edge(e.Current()), face, first, last).IsNull() &&
+          !(last - first > Precision::PConfusion()))
+        return true;
+    }
+  }
+  return false;
+}
+
 // The pcurves of a wire that winds once round the axis of a u-periodic surface, made continuous in
 // u from the vertex on the seam on (FixAddPCurve puts each in the period nearest the surface's):
 // the loop then runs from the seam round to it, and healing closes the face along the seam. Were
 // they left as they come, healing takes the stretch before the seam for a loop of its own.
 void continue_pcurves(const TopoDS_Wire& wire, const TopoDS_Face& face) {
+  if (has_vanishing_edge(face)) return;
   const double period = BRep_Tool::Surface(face)->UPeriod();
   struct Use {
     TopoDS_Edge edge;
@@ -1559,9 +1578,15 @@ const char* occt_surface_name(const TopoDS_Face& face) {
   }
 }
 
+// BRepCheck's verdict, invalid outright with an edge of no parameter range (which it cannot check).
+bool is_valid(const TopoDS_Shape& shape, bool parallel = false) {
+  return !has_vanishing_edge(shape) && BRepCheck_Analyzer(shape, Standard_True, parallel).IsValid();
+}
+
 // What BRepCheck finds wrong with an invalid face, first for the face itself, then for its wires,
 // edges and vertices ("SelfIntersectingWire", "BadOrientationOfSubshape", ...).
 std::string invalid_reason(const TopoDS_Shape& face) {
+  if (has_vanishing_edge(face)) return "an edge of no length";
   const BRepCheck_Analyzer analyzer(face);
   for (const TopAbs_ShapeEnum type : {TopAbs_FACE, TopAbs_WIRE, TopAbs_EDGE, TopAbs_VERTEX}) {
     for (TopExp_Explorer e(face, type); e.More(); e.Next()) {
@@ -1595,7 +1620,7 @@ std::string shell_face_fault(const TopoDS_Shape& face, double size) {
     if (!(BRep_Tool::Tolerance(TopoDS::Edge(e.Current())) <= size)) return "an edge's tolerance exceeds the part";
   for (TopExp_Explorer v(face, TopAbs_VERTEX); v.More(); v.Next())
     if (!(BRep_Tool::Tolerance(TopoDS::Vertex(v.Current())) <= size)) return "a vertex's tolerance exceeds the part";
-  if (!BRepCheck_Analyzer(face).IsValid()) return invalid_reason(face);
+  if (!is_valid(face)) return invalid_reason(face);
   GProp_GProps area;
   BRepGProp::SurfaceProperties(face.Oriented(TopAbs_FORWARD), area);
   if (area.Mass() < 0.0) return "its boundary runs the wrong way round";
@@ -1648,6 +1673,7 @@ bool no_faults(const std::vector<std::string>& faults) {
 // tangency, which BRepCheck takes for a self-intersecting wire unless the vertex's tolerance covers
 // the crossing. Raises it to do so for crossings within `reach` of the vertex.
 void cover_tangent_crossings(const TopoDS_Face& face, double reach) {
+  if (has_vanishing_edge(face)) return;
   BRep_Builder builder;
   for (TopExp_Explorer w(face, TopAbs_WIRE); w.More(); w.Next()) {
     std::vector<TopoDS_Edge> edges;
@@ -1822,7 +1848,7 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   on_two_threads_as_free(face_count, [&](int i) {
     try {
       OCC_CATCH_SIGNALS
-      sound[i] = TopExp_Explorer(faces_[i], TopAbs_WIRE).More() && BRepCheck_Analyzer(faces_[i]).IsValid();
+      sound[i] = TopExp_Explorer(faces_[i], TopAbs_WIRE).More() && is_valid(faces_[i]);
     } catch (const Standard_Failure&) {
     }
   });
@@ -1892,13 +1918,13 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
       // noisy rounded plate, merged with its corner cylinders, came out as planes bounded by their
       // whole outline.)
       std::vector<std::string> faults = closed_shell_faults(unify.Shape(), 0.01 * diagonal_, tol_);
-      result.valid = BRepCheck_Analyzer(unify.Shape(), Standard_True, Standard_True).IsValid() && no_faults(faults);
+      result.valid = is_valid(unify.Shape(), true) && no_faults(faults);
       if (result.valid) closed_faults = std::move(faults);
-      if (result.valid || !BRepCheck_Analyzer(shape, Standard_True, Standard_True).IsValid()) return unify.Shape();
+      if (result.valid || !is_valid(shape, true)) return unify.Shape();
     } catch (const Standard_Failure&) {
     }
   }
-  result.valid = BRepCheck_Analyzer(shape, Standard_True, Standard_True).IsValid();
+  result.valid = is_valid(shape, true);
   return shape;
 }
 
@@ -2043,7 +2069,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     }
     if (dropped || !result.valid) {  // the sewn shell when it is valid and every face is kept
       shape = kept_faces;
-      result.valid = BRepCheck_Analyzer(shape, Standard_True, Standard_True).IsValid();  // what is returned: the valid faces
+      result.valid = is_valid(shape, true);  // what is returned: the valid faces
       result.closed = result.closed && !dropped;
     }
   }
