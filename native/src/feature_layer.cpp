@@ -85,10 +85,6 @@ std::vector<int> vertex_labels(const TriangleMesh& mesh, const std::vector<int>&
   return out;
 }
 
-// Points of every patch. A vertex belongs to each patch it touches, with the normal and a third of
-// the area of that patch's faces around it; fits use the patch's interior vertices when there are
-// enough of them (on a scan the rim lies on the rounded-off edge), all of them otherwise (a coarse
-// CAD face may have no interior vertex, and its rim lies on the surface).
 // What a fit sees of a set of faces: their vertices (a third of the area of the faces around each)
 // and the faces themselves (centroid, normal, area). When at least kInteriorPoints of the vertices
 // are `interior`, only those are kept: on a scan the rim of a patch lies on the rounded-off edge,
@@ -1097,19 +1093,19 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
       const double as_well = std::min(fits_below, disc_rms + noise);
       const SurfaceFit straight = fit_surface(SurfaceType::Cylinder, wider_points, fit_options, &feature.surface);
       if (straight.valid && straight.rms <= disc_rms + noise) return false;
-      // A cone about the cylinder's axis first (fewer parameters): a cylinder grown on a narrow
-      // cone tilts by its half-angle and takes half of it.
+      // Or a cone where it fits better than the torus: a cylinder grown on a slender cone tilts by
+      // the half-angle and takes half of it, its axis along the cone's generators there (turned from
+      // the cone's by up to twice the half-angle and 45°, not across a tube's bend that a flat cone fits).
+      const SurfaceFit torus = fit_surface(SurfaceType::Torus, wider_points, fit_options);
       const SurfaceFit cone = fit_surface(SurfaceType::Cone, wider_points, fit_options);
-      const SurfaceFit torus = cone.valid && cone.rms <= as_well &&
-                                       std::abs(cone.surface.axis.dot(feature.surface.axis)) > std::sqrt(0.5)
-                                   ? cone
-                                   : fit_surface(SurfaceType::Torus, wider_points, fit_options);
-      if (!torus.valid || torus.rms > as_well ||
-          (torus.surface.type == SurfaceType::Torus &&
-           (torus.surface.radius < torus.surface.minor ||
-            std::abs(torus.surface.axis.dot(feature.surface.axis)) > std::sqrt(0.5))))
-        return false;
-      feature.set_fit(torus);
+      const bool torus_fits = torus.valid && torus.rms <= as_well && torus.surface.radius >= torus.surface.minor &&
+                              std::abs(torus.surface.axis.dot(feature.surface.axis)) <= std::sqrt(0.5);
+      const bool cone_fits = cone.valid && cone.rms <= as_well &&
+                             std::abs(cone.surface.axis.dot(feature.surface.axis)) >=
+                                 std::max(std::sqrt(0.5), std::cos(2.0 * cone.surface.half_angle));
+      if (!torus_fits && !cone_fits) return false;
+      const SurfaceFit& bent = cone_fits && (!torus_fits || cone.rms < torus.rms) ? cone : torus;
+      feature.set_fit(bent);
       fitting = feature;
       fitted = fitting_size = region.size();
       overgrown = false;
