@@ -13,8 +13,12 @@ class Solid:
 
     valid: OpenCASCADE's checker accepts the shape. closed: no free edges. solid: a valid closed
     solid (otherwise `shape` holds only the faces that could be made, as a shell or compound).
-    faces, volume (0 unless solid), surface_types: face count per type. problems: list of
-    (feature id or -1, message) for what failed. face_features: the feature of each face.
+    faces, volume (0 unless solid), surface_types: face count per type ("facet" counts the planar
+    facets of faceted regions). problems: list of (feature id or -1, message) for what failed.
+    face_features: the feature of each face. regions: per region of the mesh, a dict with its
+    feature, the kind of its face ("analytic", "bspline" or "faceted": its triangles, where its
+    surface gave no valid face), the reason when faceted, and its area. analytic_area_fraction: the
+    share of the mesh's area on analytic faces.
     max_deviation: largest distance from the input mesh vertices to the shape's faces.
     max_tolerance: largest vertex or edge tolerance, the widest gap between the faces' boundaries
     that the shape bridges (beyond the layer's distance tolerance, viewers may leave faces out).
@@ -32,6 +36,8 @@ class Solid:
         self.surface_types = dict(brep.surface_types)
         self.problems = list(brep.problems)
         self.face_features = list(brep.face_features)
+        self.regions = list(brep.regions)
+        self.analytic_area_fraction = float(brep.analytic_area_fraction)
         self.max_deviation = max_deviation
         self.deviation_deflection = deflection
         self.timings = timings
@@ -71,6 +77,10 @@ class Solid:
             "surface_types": {k: int(v) for k, v in sorted(self.surface_types.items())},
             "max_deviation": float(self.max_deviation),
             "max_tolerance": float(self.max_tolerance),
+            "analytic_area_fraction": float(self.analytic_area_fraction),
+            "faces_by_kind": {k: sum(r["kind"] == k for r in self.regions) for k in ("analytic", "bspline", "faceted")},
+            "faceted": [{"feature": int(r["feature"]), "reason": r["reason"], "area": float(r["area"])}
+                        for r in self.regions if r["kind"] == "faceted"],
             "problems": [{"feature": int(f), "message": m} for f, m in self.problems],
         }
 

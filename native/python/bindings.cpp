@@ -340,7 +340,17 @@ PYBIND11_MODULE(_native, m) {
       .def_readonly("max_tolerance", &BrepResult::max_tolerance)
       .def_readonly("surface_types", &BrepResult::surface_types)
       .def_readonly("face_features", &BrepResult::face_features)
+      .def_readonly("analytic_area_fraction", &BrepResult::analytic_area_fraction)
       .def_readonly("timings", &BrepResult::timings)
+      .def_property_readonly("regions", [](const BrepResult& r) {
+        py::list regions;
+        for (const BrepRegionFace& face : r.regions) {
+          py::dict d;
+          d["feature"] = face.feature; d["kind"] = face.kind; d["reason"] = face.reason; d["area"] = face.area;
+          regions.append(d);
+        }
+        return regions;
+      })
       .def_property_readonly("edges", [](const BrepResult& r) {
         py::list edges;
         for (const BrepEdge& e : r.edges) {

@@ -1,5 +1,7 @@
 #include "brep_builder.h"
 
+#include "brep/facets.h"
+#include "brep/solids.h"
 #include "brep_topology.h"
 #include "bspline_fitting.h"
 #include "occt_signals.h"
@@ -57,6 +59,7 @@
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
+#include <TopoDS_Iterator.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shell.hxx>
@@ -72,8 +75,10 @@
 #include <exception>
 #include <functional>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <tuple>
@@ -756,7 +761,8 @@ struct FreeformSurface {
 class BrepBuilder {
  public:
   BrepBuilder(const TriangleMesh& mesh, const std::vector<Surface>& surfaces, const BrepOptions& options)
-      : mesh_(mesh), surfaces_(surfaces), progress_(options.progress, "topology") {
+      : mesh_(mesh), surfaces_(surfaces), features_(static_cast<int>(surfaces.size())),
+        progress_(options.progress, "topology") {
     diagonal_ = bounding_box_diagonal(mesh);
     tol_ = options.tolerance > 0 ? options.tolerance : 1e-3 * diagonal_;
     angle_eps_ = std::max(1e-9, tol_ / std::max(diagonal_, 1e-300));
@@ -789,6 +795,7 @@ class BrepBuilder {
     std::string problem;       // why it has none (empty: none to report)
   };
   ChainCurve chain_curve(size_t chain) const;
+  void compute_curves();
   void make_edges(BrepResult& result);
   void make_faces(BrepResult& result);
   bool is_cap(size_t region) const;  // a cone or sphere bounded by one closed chain
@@ -800,7 +807,8 @@ class BrepBuilder {
   int region_of(const TopoDS_Face& face) const;
 
   const TriangleMesh& mesh_;
-  const std::vector<Surface>& surfaces_;
+  std::vector<Surface> surfaces_;  // the layer's, and one freeform feature for what none explains
+  int features_ = 0;               // the layer's
   // Shares of the whole run, as measured on a scan of a million triangles.
   const ProgressSpan progress_;
   double diagonal_ = 0, tol_ = 0, angle_eps_ = 0;
@@ -819,6 +827,25 @@ class BrepBuilder {
   std::vector<char> collapsed_;  // chains whose two corners are one vertex: no edge
   std::vector<TopoDS_Face> faces_;
   std::vector<int> face_region_;
+  std::vector<char> face_facet_;  // per face of faces_: a planar facet of a faceted region
+
+  // Graceful degradation (build_round): regions made of their triangles, and the chains that run
+  // as the mesh's polyline because a faceted region or a failed curve lies along them.
+  TriangleMesh clean_;                      // the mesh without degenerate triangles
+  std::vector<std::vector<int>> region_faces_;
+  std::vector<ChainCurve> curves_;          // per chain, computed once
+  std::vector<char> faceted_, polyline_;
+  std::vector<std::string> facet_reason_;   // per region: why it is faceted
+  std::unique_ptr<FacetBuilder> facets_;
+  std::map<int, std::vector<TopoDS_Edge>> chain_pieces_;  // polyline chain -> its edges, along it
+  std::map<const Standard_Transient*, int> facet_region_;  // facet plane -> region
+  std::vector<Handle(Geom_Surface)> facet_planes_;         // (keeps those keys alive)
+  std::map<int, std::string> failed_;       // regions whose face failed this round -> why
+  void fail(int region, const std::string& why) {
+    if (region >= 0) failed_.try_emplace(region, why);
+  }
+  void place_polylines();
+  bool build_round(BrepResult& result, const BrepOptions& options);
 };
 
 // Whether a region goes all round the axis of its surface, and where its seam goes then. A loop of
@@ -1134,7 +1161,7 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
     const auto third = [&](const std::vector<int>& features) {  // the one besides the chain's two
       const bool both = std::count(features.begin(), features.end(), left) && std::count(features.begin(), features.end(), right);
       for (int f : features)
-        if (both && f != left && f != right) return &surfaces_[f];
+        if (both && f != left && f != right) return static_cast<const Surface*>(&surfaces_[f]);
       return static_cast<const Surface*>(nullptr);
     };
     const std::array<const Surface*, 2> thirds = {third(f->second), third(b->second)};
@@ -1334,32 +1361,77 @@ BrepBuilder::ChainCurve BrepBuilder::chain_curve(size_t c) const {
   return out;
 }
 
-void BrepBuilder::make_edges(BrepResult& result) {
-  BRep_Builder builder;
+void BrepBuilder::compute_curves() {
   const size_t chains = topo_.chains.size();
-  edges_.assign(chains, TopoDS_Edge());
-  edge_ok_.assign(chains, 0);
-  const ProgressSpan progress = progress_.sub("edges", 0.55, 0.8);
-  std::vector<ChainCurve> curves(chains);
+  curves_.assign(chains, ChainCurve());
   std::vector<std::exception_ptr> errors(chains);  // raised after the threads, as the first chain's would be
   on_two_threads_as_free(static_cast<int>(chains), [&](int c) {
     try {
-      if (!collapsed_[c]) curves[c] = chain_curve(c);
+      if (!collapsed_[c]) curves_[c] = chain_curve(c);
     } catch (...) {
       errors[c] = std::current_exception();
     }
   });
   for (const std::exception_ptr& error : errors)
     if (error) std::rethrow_exception(error);
+}
+
+// The mesh's own border between two regions, where one of them is faceted or their curve failed:
+// its vertices move onto the surfaces of the analytic regions beside it (onto both, where both are),
+// so that the straight edges between them bound those faces within the tolerance their pcurves
+// measure. Corners stay the vertices that the analytic edges end at.
+void BrepBuilder::place_polylines() {
+  facets_ = std::make_unique<FacetBuilder>(clean_);
+  facet_region_.clear();
+  facet_planes_.clear();
+  for (const auto& [v, vertex] : vertices_) facets_->share(v, vertex);
+  const auto analytic = [&](int r) { return r >= 0 && !faceted_[r] && !region_surfaces_[r].IsNull(); };
+  for (size_t c = 0; c < topo_.chains.size(); ++c) {
+    if (!polyline_[c]) continue;
+    const BoundaryChain& chain = topo_.chains[c];
+    std::vector<LocalSurface> sides;
+    for (int r : {chain.left, chain.right})
+      if (analytic(r)) sides.push_back(local_surface(topo_.region_feature[r]));
+    if (sides.empty()) continue;
+    const size_t first = chain.closed ? 0 : 1, end = chain.closed ? chain.vertices.size() : chain.vertices.size() - 1;
+    std::vector<Vec3> raw;
+    for (size_t i = first; i < end; ++i) raw.push_back(clean_.V.row(chain.vertices[i]).transpose());
+    const std::vector<Vec3> placed = project_on_both(raw, sides[0], sides.size() > 1 ? &sides[1] : nullptr);
+    for (size_t i = first; i < end; ++i) facets_->place(chain.vertices[i], placed[i - first]);
+  }
+}
+
+void BrepBuilder::make_edges(BrepResult& result) {
+  BRep_Builder builder;
+  const size_t chains = topo_.chains.size();
+  edges_.assign(chains, TopoDS_Edge());
+  edge_ok_.assign(chains, 0);
+  split_edges_.clear();
+  chain_pieces_.clear();
+  const ProgressSpan progress = progress_.sub("edges", 0.55, 0.8);
   // The edges, their vertices' tolerances and the seam splits, in chain order.
   for (size_t c = 0; c < chains; ++c) {
     progress.step(static_cast<double>(c) / chains);
+    const BoundaryChain& chain = topo_.chains[c];
+    const ChainCurve& edge_curve = curves_[c];
+    if (polyline_[c]) {
+      std::vector<TopoDS_Edge>& pieces = chain_pieces_[c];
+      for (size_t i = 0; i + 1 < chain.vertices.size(); ++i)
+        for (const TopoDS_Edge& piece : facets_->path(chain.vertices[i], chain.vertices[i + 1])) pieces.push_back(piece);
+      edge_ok_[c] = 1;
+      BrepEdge report = edge_curve.report;
+      report.a = topo_.region_feature[chain.left];
+      report.b = chain.right >= 0 ? topo_.region_feature[chain.right] : -1;
+      report.mesh_vertices = static_cast<int>(chain.vertices.size());
+      report.closed = chain.closed;
+      report.curve = "polyline";
+      result.edges.push_back(report);
+      continue;
+    }
     if (collapsed_[c]) {
       edge_ok_[c] = 1;
       continue;
     }
-    const BoundaryChain& chain = topo_.chains[c];
-    const ChainCurve& edge_curve = curves[c];
     result.edges.push_back(edge_curve.report);
     if (!edge_curve.problem.empty()) result.problems.push_back({topo_.region_feature[chain.left], edge_curve.problem});
     if (edge_curve.curve.IsNull()) continue;
@@ -1504,12 +1576,24 @@ std::optional<TopoDS_Face> BrepBuilder::pole_cap(size_t region) {
 
 void BrepBuilder::make_faces(BrepResult& result) {
   BRep_Builder builder;
+  faces_.clear();
+  face_region_.clear();
+  face_facet_.clear();
   const ProgressSpan progress = progress_.sub("faces", 0.8, 0.83);
   for (size_t r = 0; r < topo_.region_loops.size(); ++r) {
     progress.step(static_cast<double>(r) / topo_.region_loops.size());
     const int feature = topo_.region_feature[r];
-    if (region_surfaces_[r].IsNull()) {
-      result.problems.push_back({feature, "freeform feature without a fitted surface: no face"});
+    if (faceted_[r]) {
+      for (int f : region_faces_[r]) {
+        const std::optional<TopoDS_Face> facet = facets_->facet(f);
+        if (!facet) continue;  // no area: its neighbours' edges meet across it
+        const Handle(Geom_Surface) plane = BRep_Tool::Surface(*facet);
+        facet_region_[plane.get()] = static_cast<int>(r);
+        facet_planes_.push_back(plane);
+        faces_.push_back(*facet);
+        face_region_.push_back(static_cast<int>(r));
+        face_facet_.push_back(1);
+      }
       continue;
     }
     bool complete = true;
@@ -1518,19 +1602,22 @@ void BrepBuilder::make_faces(BrepResult& result) {
     }
     if (!complete) {
       result.problems.push_back({feature, "the face has an edge that could not be made"});
+      fail(static_cast<int>(r), "an edge of its face could not be made");
       continue;
     }
     const bool outward = region_sense_[r] > 0;
     if (const std::optional<TopoDS_Face> cap = pole_cap(r)) {
       faces_.push_back(outward ? *cap : TopoDS::Face(cap->Reversed()));
       face_region_.push_back(static_cast<int>(r));
+      face_facet_.push_back(0);
       continue;
     }
     try {
       TopoDS_Face face;
       builder.MakeFace(face, region_surfaces_[r], Precision::Confusion());
       for (const auto& loop : topo_.region_loops[r]) {
-        if (std::all_of(loop.begin(), loop.end(), [&](const ChainUse& use) { return collapsed_[use.chain] != 0; }))
+        if (std::all_of(loop.begin(), loop.end(),
+                        [&](const ChainUse& use) { return collapsed_[use.chain] != 0 && !polyline_[use.chain]; }))
           continue;
         TopoDS_Wire wire;
         builder.MakeWire(wire);
@@ -1539,8 +1626,14 @@ void BrepBuilder::make_faces(BrepResult& result) {
         const int n = static_cast<int>(loop.size());
         for (int i = 0; i < n; ++i) {
           const ChainUse& use = loop[outward ? i : n - 1 - i];
-          if (collapsed_[use.chain]) continue;
           const bool forward = use.forward == outward;
+          if (const auto pieces = chain_pieces_.find(use.chain); pieces != chain_pieces_.end()) {
+            const std::vector<TopoDS_Edge>& along = pieces->second;  // oriented along the chain
+            for (size_t k = 0; k < along.size(); ++k)
+              builder.Add(wire, forward ? along[k] : TopoDS::Edge(along[along.size() - 1 - k].Reversed()));
+            continue;
+          }
+          if (collapsed_[use.chain]) continue;
           const auto split = split_edges_.find(use.chain);
           if (split == split_edges_.end()) {
             builder.Add(wire, edges_[use.chain].Oriented(forward ? TopAbs_FORWARD : TopAbs_REVERSED));
@@ -1560,8 +1653,10 @@ void BrepBuilder::make_faces(BrepResult& result) {
         for (TopExp_Explorer w(face, TopAbs_WIRE); w.More(); w.Next()) continue_pcurves(TopoDS::Wire(w.Current()), face);
       faces_.push_back(outward ? face : TopoDS::Face(face.Reversed()));
       face_region_.push_back(static_cast<int>(r));
+      face_facet_.push_back(0);
     } catch (const Standard_Failure& failure) {
       result.problems.push_back({feature, occt_message(failure, "the face could not be made")});
+      fail(static_cast<int>(r), occt_message(failure, "its face could not be made"));
     }
   }
 }
@@ -1664,6 +1759,18 @@ std::vector<std::string> closed_shell_faults(const TopoDS_Shape& shape, double d
   return faults;
 }
 
+// A solid, or a compound of solids (a mesh of several bodies).
+bool is_solid_shape(const TopoDS_Shape& shape) {
+  if (shape.ShapeType() == TopAbs_SOLID) return true;
+  if (shape.ShapeType() != TopAbs_COMPOUND) return false;
+  bool any = false;
+  for (TopoDS_Iterator it(shape); it.More(); it.Next()) {
+    if (it.Value().ShapeType() != TopAbs_SOLID) return false;
+    any = true;
+  }
+  return any;
+}
+
 bool no_faults(const std::vector<std::string>& faults) {
   return std::all_of(faults.begin(), faults.end(), [](const std::string& f) { return f.empty(); });
 }
@@ -1725,6 +1832,7 @@ bool has_free_edges(const TopoDS_Shape& shape) {
 // the face's.
 int BrepBuilder::region_of(const TopoDS_Face& face) const {
   Handle(Geom_Surface) surface = BRep_Tool::Surface(face);
+  if (const auto facet = facet_region_.find(surface.get()); facet != facet_region_.end()) return facet->second;
   if (const Handle(Geom_RectangularTrimmedSurface) trimmed = Handle(Geom_RectangularTrimmedSurface)::DownCast(surface);
       !trimmed.IsNull())
     surface = trimmed->BasisSurface();  // merging bounds a periodic face's surface
@@ -1800,8 +1908,9 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     bool stray = false;  // its curves lie kStrayEdge tolerances apart or more
   };
   std::vector<PcurveGap> pcurve_gaps;
-  for (int i = 0; i < face_count; ++i)
-    for (TopExp_Explorer e(faces_[i], TopAbs_EDGE); e.More(); e.Next()) pcurve_gaps.push_back({i, TopoDS::Edge(e.Current())});
+  for (int i = 0; i < face_count; ++i)  // (a facet's edges lie in its plane: their pcurves are exact)
+    if (!face_facet_[i])
+      for (TopExp_Explorer e(faces_[i], TopAbs_EDGE); e.More(); e.Next()) pcurve_gaps.push_back({i, TopoDS::Edge(e.Current())});
   on_two_threads_as_free(static_cast<int>(pcurve_gaps.size()), [&](int k) {
     PcurveGap& g = pcurve_gaps[k];
     try {
@@ -1821,11 +1930,12 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   std::vector<char> stray(face_count, 0);
   for (const PcurveGap& g : pcurve_gaps) stray[g.face] |= g.stray;
   for (int i = 0; i < face_count; ++i)
-    if (stray[i])
-      result.problems.push_back({topo_.region_feature[face_region_[i]],
-                                 "its face does not follow its boundary (an edge lies more than " +
-                                     std::to_string(static_cast<int>(kStrayEdge)) +
-                                     " tolerances off its surface): left out"});
+    if (stray[i]) {
+      const std::string why = "its face does not follow its boundary (an edge lies more than " +
+                              std::to_string(static_cast<int>(kStrayEdge)) + " tolerances off its surface)";
+      result.problems.push_back({topo_.region_feature[face_region_[i]], why + ": left out"});
+      fail(face_region_[i], why);
+    }
   BRep_Builder tolerances;
   for (const PcurveGap& g : pcurve_gaps) {
     if (!(g.gap > BRep_Tool::Tolerance(g.edge))) continue;
@@ -1834,10 +1944,11 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     for (TopExp_Explorer v(g.edge, TopAbs_VERTEX); v.More(); v.Next())
       tolerances.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
   }
-  for (const TopoDS_Face& face : faces_) {
+  for (int i = 0; i < face_count; ++i) {
+    if (face_facet_[i]) continue;
     try {
       OCC_CATCH_SIGNALS
-      cover_tangent_crossings(face, tol_);
+      cover_tangent_crossings(faces_[i], tol_);
     } catch (const Standard_Failure&) {
     }
   }
@@ -1846,14 +1957,37 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   // that does not close take most of the time), before healing touches its neighbours' edges.
   std::vector<char> sound(face_count, 0);
   on_two_threads_as_free(face_count, [&](int i) {
+    if (face_facet_[i]) {  // valid by construction
+      sound[i] = 1;
+      return;
+    }
     try {
       OCC_CATCH_SIGNALS
       sound[i] = TopExp_Explorer(faces_[i], TopAbs_WIRE).More() && is_valid(faces_[i]);
     } catch (const Standard_Failure&) {
     }
   });
-  BRepBuilderAPI_Sewing sewing(tol_);
   const ProgressSpan progress = progress_.sub("sewing", 0.83, 0.9);
+  if (std::all_of(face_facet_.begin(), face_facet_.end(), [](char facet) { return facet != 0; })) {
+    // Facets only: they share their edges already, and sewing thousands of them is slow.
+    const std::vector<TopoDS_Shell> shells = connected_shells(faces_);
+    result.closed = std::none_of(shells.begin(), shells.end(), [](const TopoDS_Shell& shell) { return has_free_edges(shell); });
+    TopoDS_Shape shape;
+    if (result.closed) {
+      shape = solids_from_shells(shells);
+    } else {
+      BRep_Builder builder;
+      TopoDS_Compound open;
+      builder.MakeCompound(open);
+      for (const TopoDS_Shell& shell : shells) builder.Add(open, shell);
+      shape = open;
+    }
+    progress.step(1.0);
+    result.valid = is_valid(shape, true);
+    if (const char* dump = std::getenv("IDEALIZE_DEBUG_DUMP")) BRepTools::Write(shape, dump);
+    return shape;
+  }
+  BRepBuilderAPI_Sewing sewing(tol_);
   for (int i = 0; i < face_count; ++i) {
     progress.sub(0.0, 0.5).step(static_cast<double>(i) / face_count);
     if (stray[i]) continue;
@@ -1878,6 +2012,7 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
       sewing.Add(fix.Face());
     } catch (const Standard_Failure& failure) {
       result.problems.push_back({topo_.region_feature[face_region_[i]], occt_message(failure, "its face could not be healed")});
+      fail(face_region_[i], occt_message(failure, "its face could not be healed"));
     }
   }
   progress.step(0.5);
@@ -1892,17 +2027,17 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     shape = shell;
   }
 
-  // Closed shells become solids.
-  TopoDS_Shell fixed_shell;
-  int shells = 0;
-  for (TopExp_Explorer e(shape, TopAbs_SHELL); e.More(); e.Next(), ++shells) fixed_shell = TopoDS::Shell(e.Current());
-  const bool closed = shells == 1 && !has_free_edges(shape);
-  result.closed = closed;
-  if (closed) {
-    ShapeFix_Solid make_solid;
-    TopoDS_Solid solid = TopoDS::Solid(make_solid.SolidFromShell(fixed_shell));
-    shape = solid;
+  // Closed shells become solids (one per body).
+  std::vector<TopoDS_Shell> shells;
+  int shell_faces = 0, faces = 0;
+  for (TopExp_Explorer e(shape, TopAbs_SHELL); e.More(); e.Next()) {
+    shells.push_back(TopoDS::Shell(e.Current()));
+    for (TopExp_Explorer f(e.Current(), TopAbs_FACE); f.More(); f.Next()) ++shell_faces;
   }
+  for (TopExp_Explorer f(shape, TopAbs_FACE); f.More(); f.Next()) ++faces;
+  const bool closed = !shells.empty() && shell_faces == faces && !has_free_edges(shape);
+  result.closed = closed;
+  if (closed) shape = solids_from_shells(shells);
   if (options.unify && closed) {
     // Merging is a refinement: where OCCT's merging fails (it faults on some edges) or leaves an
     // invalid face (a circle cut where a sphere cap's seam met it, whose pcurve then wraps the
@@ -1933,7 +2068,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   progress_.step(0.0);  // a cancelled Progress stops here, before any work
   auto since = Clock::now();
   // Faces whose corners coincide carry no area and no topology.
-  TriangleMesh clean;
+  TriangleMesh& clean = clean_;
   std::vector<int> clean_labels;
   clean.V = mesh_.V;
   std::vector<int> kept;
@@ -1951,9 +2086,19 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   progress_.step(0.15);
   const std::vector<int> merged = dissolve_sampling_blends(clean, topology, merge_same_surfaces(clean_labels));
   progress_.step(0.25);
-  const std::vector<int> face_feature = complete_face_features(clean, topology, merged, surfaces_);
+  // A part of the mesh that no feature reaches is one more, freeform, feature: a B-spline fitted to
+  // it, or its facets.
+  const int unexplained = static_cast<int>(surfaces_.size());
+  const std::vector<int> face_feature = complete_face_features(clean, topology, merged, surfaces_, 0.1, unexplained);
+  if (std::count(face_feature.begin(), face_feature.end(), unexplained)) {
+    Surface freeform;
+    freeform.type = SurfaceType::Freeform;
+    surfaces_.push_back(freeform);
+  }
   progress_.step(0.35);
   topo_ = trace_boundaries(clean, topology, face_feature);
+  region_faces_.assign(topo_.region_feature.size(), {});
+  for (int f = 0; f < clean.num_faces(); ++f) region_faces_[topo_.face_region[f]].push_back(f);
   stage(result, "brep.topology", since);
   progress_.step(0.45);
 
@@ -2006,11 +2151,83 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     region_surfaces_[r] = spline != freeform_.end() ? Handle(Geom_Surface)(spline->second.surface)
                                                     : make_surface(surfaces_[topo_.region_feature[r]], region_points[r], round);
   }
-  make_edges(result);
+  compute_curves();
   stage(result, "brep.edges", since);
-  make_faces(result);
+  // Graceful degradation, region by region: a region whose face fails (not made, not valid, or
+  // where the shell does not close) is made of its triangles in the next round, and the chains
+  // beside it run along the mesh's border. Each round facets at least one more region; the last
+  // facets them all, which closes whenever the mesh does.
+  constexpr int kRounds = 4;  // analytic attempts before every region is faceted (a time budget)
+  faceted_.assign(regions, 0);
+  facet_reason_.assign(regions, "");
+  for (int r = 0; r < regions; ++r)
+    if (region_surfaces_[r].IsNull()) {
+      faceted_[r] = 1;
+      facet_reason_[r] = "no surface explains it (a freeform region without a fitted B-spline)";
+    }
+  const BrepResult prepared = result;
+  for (int round = 0;; ++round) {
+    const bool all = std::all_of(faceted_.begin(), faceted_.end(), [](char f) { return f != 0; });
+    result = prepared;
+    failed_.clear();
+    polyline_.assign(topo_.chains.size(), 0);
+    for (size_t c = 0; c < topo_.chains.size(); ++c) {
+      const BoundaryChain& chain = topo_.chains[c];
+      polyline_[c] = faceted_[chain.left] || (chain.right >= 0 && faceted_[chain.right]) ||
+                     (!collapsed_[c] && curves_[c].curve.IsNull());
+    }
+    place_polylines();
+    if (build_round(result, options) || all) break;
+    bool more = false;
+    for (const auto& [r, why] : failed_)
+      if (!faceted_[r]) {
+        faceted_[r] = 1;
+        facet_reason_[r] = why;
+        more = true;
+      }
+    if (!more || round + 1 >= kRounds)
+      for (int r = 0; r < regions; ++r)
+        if (!faceted_[r]) {
+          faceted_[r] = 1;
+          facet_reason_[r] = "the shell did not close with its analytic face";
+        }
+  }
   stage(result, "brep.faces", since);
+  // What became of each region.
+  const Eigen::VectorXd areas = face_areas(clean_);
+  double total = 0.0, analytic = 0.0;
+  for (int r = 0; r < regions; ++r) {
+    BrepRegionFace face;
+    face.feature = topo_.region_feature[r];
+    for (int f : region_faces_[r]) face.area += areas[f];
+    face.kind = faceted_[r] ? "faceted" : freeform_.count(face.feature) ? "bspline" : "analytic";
+    face.reason = facet_reason_[r];
+    total += face.area;
+    if (face.kind == "analytic") analytic += face.area;
+    result.regions.push_back(face);
+  }
+  result.analytic_area_fraction = total > 0 ? analytic / total : 0.0;
+  // The feature added for what no feature explained is none of the layer's.
+  const auto layer_feature = [&](int& feature) {
+    if (feature >= features_) feature = -1;
+  };
+  for (BrepProblem& problem : result.problems) layer_feature(problem.feature);
+  for (int& feature : result.face_features) layer_feature(feature);
+  for (BrepRegionFace& face : result.regions) layer_feature(face.feature);
+  for (BrepEdge& edge : result.edges) {
+    layer_feature(edge.a);
+    layer_feature(edge.b);
+  }
+  return result;
+}
 
+// One attempt with the regions faceted so far: edges, faces, the shell and its checks. Returns
+// whether it gave a valid closed solid; the regions that failed are in failed_.
+bool BrepBuilder::build_round(BrepResult& result, const BrepOptions& options) {
+  auto since = Clock::now();
+  make_edges(result);
+  make_faces(result);
+  stage(result, "brep.round.faces", since);
   std::vector<std::string> closed_faults;
   TopoDS_Shape shape = assemble(result, options, closed_faults);
   stage(result, "brep.sew", since);
@@ -2019,7 +2236,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
 
   // Validated by assemble, a closed solid's faces by closed_shell_faults; an invalid result keeps
   // only its valid faces, as a shell (never an invalid solid).
-  result.solid = result.valid && result.closed && shape.ShapeType() == TopAbs_SOLID;
+  result.solid = result.valid && result.closed && is_solid_shape(shape);
   if (result.solid && closed_faults.empty()) {
     try {
       OCC_CATCH_SIGNALS
@@ -2041,6 +2258,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
         faults[i] = closed_faults[i];
         return;
       }
+      if (facet_region_.count(BRep_Tool::Surface(sewn_faces[i]).get())) return;  // valid by construction
       try {
         OCC_CATCH_SIGNALS
         faults[i] = shell_face_fault(sewn_faces[i], diagonal_);
@@ -2061,6 +2279,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
         const std::string message = "its face is not valid (" + reason + ")";
         const int region = region_of(sewn_faces[i]);
         // Never dropped silently, also where no feature is known.
+        fail(region, message);
         if (region >= 0)
           result.problems.push_back({topo_.region_feature[region], message});
         else
@@ -2073,13 +2292,27 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
       result.closed = result.closed && !dropped;
     }
   }
-  if (!result.closed) result.problems.push_back({-1, "the faces do not close into a solid (free edges remain)"});
+  if (!result.closed) {
+    result.problems.push_back({-1, "the faces do not close into a solid (free edges remain)"});
+  }
+  if (!result.closed && failed_.empty()) {
+    // No face failed on its own: the faces along the free edges.
+    TopTools_IndexedDataMapOfShapeListOfShape faces_of_edge;
+    TopExp::MapShapesAndUniqueAncestors(shape, TopAbs_EDGE, TopAbs_FACE, faces_of_edge);
+    for (int i = 1; i <= faces_of_edge.Extent(); ++i) {
+      const TopTools_ListOfShape& faces = faces_of_edge(i);
+      if (BRep_Tool::Degenerated(TopoDS::Edge(faces_of_edge.FindKey(i))) || faces.Extent() != 1) continue;
+      const TopoDS_Face& face = TopoDS::Face(faces.First());
+      if (BRep_Tool::IsClosed(TopoDS::Edge(faces_of_edge.FindKey(i)), face)) continue;
+      fail(region_of(face), "the shell does not close along its boundary");
+    }
+  }
   result.shape = shape;
   for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
     const TopoDS_Face& face = TopoDS::Face(e.Current());
     ++result.faces;
-    ++result.surface_types[occt_surface_name(face)];
     const int region = region_of(face);
+    ++result.surface_types[region >= 0 && faceted_[region] ? "facet" : occt_surface_name(face)];
     result.face_features.push_back(region < 0 ? -1 : topo_.region_feature[region]);
   }
   for (TopExp_Explorer e(shape, TopAbs_VERTEX); e.More(); e.Next())
@@ -2094,7 +2327,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   }
   stage(result, "brep.check", since);
   checking.step(1.0);
-  return result;
+  return result.solid;
 }
 
 }  // namespace

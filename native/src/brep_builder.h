@@ -50,6 +50,16 @@ struct BrepEdge {
   std::string curve;        // "closed form", "intersection", "fitted", or "" when it failed
 };
 
+// How one region of the mesh became a face: `analytic` (its feature's surface), `bspline` (a surface
+// fitted to a freeform region) or `faceted` (its triangles as planar facets, where its surface gave
+// no valid face: `reason` says why).
+struct BrepRegionFace {
+  int feature = -1;
+  std::string kind;
+  std::string reason;
+  double area = 0.0;  // of the region's triangles
+};
+
 struct BrepResult {
   TopoDS_Shape shape;      // a solid when `solid`, otherwise a shell or compound of the faces made
   bool valid = false;      // BRepCheck_Analyzer accepts the whole shape
@@ -62,6 +72,8 @@ struct BrepResult {
   std::vector<BrepProblem> problems;
   std::vector<int> face_features;            // per face of `shape` (TopExp order): its feature, -1 unknown
   std::vector<BrepEdge> edges;
+  std::vector<BrepRegionFace> regions;       // per region of the labelled mesh
+  double analytic_area_fraction = 0.0;       // of the mesh's area, on analytic faces
   std::vector<std::pair<std::string, double>> timings;
 };
 

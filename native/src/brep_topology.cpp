@@ -45,7 +45,8 @@ double surface_gap(const Surface& surface, const Eigen::Vector3d& p) {
 
 std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopology& topology,
                                         const std::vector<int>& labels,
-                                        const std::vector<Surface>& surfaces, double island_fraction) {
+                                        const std::vector<Surface>& surfaces, double island_fraction,
+                                        int unexplained) {
   const int nf = mesh.num_faces();
   std::vector<int> feature(labels);
   // Grow the labelled faces into the unlabelled ones, one ring per round.
@@ -71,7 +72,9 @@ std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopo
     feature.swap(next);
   }
   if (std::any_of(feature.begin(), feature.end(), [](int l) { return l < 0; })) {
-    throw MeshError("a part of the mesh has no feature at all: it cannot become a B-rep face");
+    if (unexplained < 0) throw MeshError("a part of the mesh has no feature at all: it cannot become a B-rep face");
+    for (int& l : feature)
+      if (l < 0) l = unexplained;
   }
 
   // Small detached pieces of a feature join the neighbour they share most boundary with.
@@ -84,7 +87,7 @@ std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopo
     component_area[component[f]] += areas[f];
     component_faces[component[f]].push_back(f);
   }
-  std::vector<double> largest(surfaces.size(), 0.0);
+  std::vector<double> largest(std::max<size_t>(surfaces.size(), unexplained + 1), 0.0);
   for (int k = 0; k < count; ++k) {
     const int l = feature[component_faces[k][0]];
     largest[l] = std::max(largest[l], component_area[k]);
