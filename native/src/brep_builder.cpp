@@ -45,7 +45,10 @@
 #include <Geom_ToroidalSurface.hxx>
 #include <Geom_TrimmedCurve.hxx>
 #include <Precision.hxx>
+#include <BRepTools_ReShape.hxx>
+#include <ShapeBuild_ReShape.hxx>
 #include <ShapeFix_Edge.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <ShapeFix_Face.hxx>
 #include <ShapeFix_Solid.hxx>
 #include <ShapeUpgrade_UnifySameDomain.hxx>
@@ -75,6 +78,7 @@
 #include <exception>
 #include <functional>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <map>
@@ -803,6 +807,7 @@ class BrepBuilder {
   // The healed, sewn and merged shape; `closed_faults`: closed_shell_faults of the solid returned
   // where merging had to judge its faces already, else empty.
   TopoDS_Shape assemble(BrepResult& result, const BrepOptions& options, std::vector<std::string>& closed_faults);
+  TopoDS_Shape with_facets(const TopoDS_Shape& sewn, const BRepBuilderAPI_Sewing& sewing, ShapeBuild_ReShape& healed) const;
   // The region whose surface `face` lies on, -1 none.
   int region_of(const TopoDS_Face& face) const;
 
@@ -1384,8 +1389,15 @@ void BrepBuilder::place_polylines() {
   facets_ = std::make_unique<FacetBuilder>(clean_);
   facet_region_.clear();
   facet_planes_.clear();
-  for (const auto& [v, vertex] : vertices_) facets_->share(v, vertex);
   const auto analytic = [&](int r) { return r >= 0 && !faceted_[r] && !region_surfaces_[r].IsNull(); };
+  // A corner where an analytic face meets is the vertex its edges end at; among facets alone it
+  // stays the mesh's vertex (the surfaces may have put two corners at one point).
+  std::vector<char> touches_analytic(clean_.num_vertices(), 0);
+  for (int f = 0; f < clean_.num_faces(); ++f)
+    if (analytic(topo_.face_region[f]))
+      for (int k = 0; k < 3; ++k) touches_analytic[clean_.F(f, k)] = 1;
+  for (const auto& [v, vertex] : vertices_)
+    if (touches_analytic[v]) facets_->share(v, vertex);
   for (size_t c = 0; c < topo_.chains.size(); ++c) {
     if (!polyline_[c]) continue;
     const BoundaryChain& chain = topo_.chains[c];
@@ -1536,6 +1548,7 @@ std::optional<TopoDS_Face> BrepBuilder::pole_cap(size_t region) {
   if (!is_cap(region)) return std::nullopt;
   const auto& loops = topo_.region_loops[region];
   const TopoDS_Edge& edge = edges_[loops[0][0].chain];
+  if (edge.IsNull()) return std::nullopt;  // a polyline: the face is bounded by its pieces
   double first, last;
   const Handle(Geom_Circle) circle = Handle(Geom_Circle)::DownCast(BRep_Tool::Curve(edge, first, last));
   if (circle.IsNull()) return std::nullopt;
@@ -1882,6 +1895,42 @@ double sampled_pcurve_gap(const TopoDS_Edge& edge, const TopoDS_Face& face) {
 
 }  // namespace
 
+// The sewn analytic faces and the facets, whose edges and vertices are replaced by those that
+// healing (`healed`) and then sewing made of them, grouped into connected shells.
+TopoDS_Shape BrepBuilder::with_facets(const TopoDS_Shape& sewn, const BRepBuilderAPI_Sewing& sewing,
+                                      ShapeBuild_ReShape& healed) const {
+  BRepTools_ReShape replace;
+  TopTools_IndexedMapOfShape parts;
+  for (size_t i = 0; i < faces_.size(); ++i)
+    if (face_facet_[i]) {
+      TopExp::MapShapes(faces_[i], TopAbs_EDGE, parts);
+      TopExp::MapShapes(faces_[i], TopAbs_VERTEX, parts);
+    }
+  bool any = false;
+  for (int k = 1; k <= parts.Extent(); ++k) {
+    const TopoDS_Shape& part = parts(k);
+    TopoDS_Shape now = healed.Value(part);
+    if (sewing.IsModifiedSubShape(now)) now = sewing.ModifiedSubShape(now);
+    if (now.IsSame(part) && now.Orientation() == part.Orientation()) continue;
+    replace.Replace(part, now);
+    any = true;
+  }
+  // All facets at once: an edge they share is rebuilt once, with its new vertices.
+  BRep_Builder builder;
+  TopoDS_Compound facets;
+  builder.MakeCompound(facets);
+  for (size_t i = 0; i < faces_.size(); ++i)
+    if (face_facet_[i]) builder.Add(facets, faces_[i]);
+  std::vector<TopoDS_Face> faces;
+  for (TopExp_Explorer e(sewn, TopAbs_FACE); e.More(); e.Next()) faces.push_back(TopoDS::Face(e.Current()));
+  for (TopExp_Explorer e(any ? replace.Apply(facets) : TopoDS_Shape(facets), TopAbs_FACE); e.More(); e.Next())
+    faces.push_back(TopoDS::Face(e.Current()));
+  TopoDS_Compound shells;
+  builder.MakeCompound(shells);
+  for (const TopoDS_Shell& shell : connected_shells(faces)) builder.Add(shells, shell);
+  return shells;
+}
+
 TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& options,
                                    std::vector<std::string>& closed_faults) {
   // Each face that needs it is healed on its own (pcurves shifted into one period, seams of
@@ -1987,10 +2036,17 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     if (const char* dump = std::getenv("IDEALIZE_DEBUG_DUMP")) BRepTools::Write(shape, dump);
     return shape;
   }
-  BRepBuilderAPI_Sewing sewing(tol_);
+  // The analytic faces are sewn; the facets, which share their edges and vertices exactly, are not
+  // (sewing thousands of them takes minutes): they take the edges and vertices that healing and
+  // sewing put in place of theirs.
+  // (Its analysis drops edges shorter than the tolerance, which a polyline along the mesh has
+  // many of, and which the facets keep.)
+  const bool with_facet = std::any_of(face_facet_.begin(), face_facet_.end(), [](char facet) { return facet != 0; });
+  BRepBuilderAPI_Sewing sewing(tol_, Standard_True, !with_facet);
+  const Handle(ShapeBuild_ReShape) healed = new ShapeBuild_ReShape;
   for (int i = 0; i < face_count; ++i) {
     progress.sub(0.0, 0.5).step(static_cast<double>(i) / face_count);
-    if (stray[i]) continue;
+    if (stray[i] || face_facet_[i]) continue;
     if (sound[i]) {
       sewing.Add(faces_[i]);
       continue;
@@ -1998,6 +2054,7 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     try {
       OCC_CATCH_SIGNALS
       ShapeFix_Face fix(faces_[i]);
+      fix.SetContext(healed);  // (what it replaces, for the facets that share those edges)
       // Its periodic-degenerate check dereferences a null curve on some faces (OCCT 7.6); our
       // spheres and cones have their poles and apices away from the faces anyway.
       fix.FixPeriodicDegeneratedMode() = 0;
@@ -2019,6 +2076,11 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   sewing.Perform();
   progress.step(0.8);
   TopoDS_Shape shape = sewing.SewedShape();
+  if (with_facet) shape = with_facets(shape, sewing, *healed);
+  if (const char* dump = std::getenv("IDEALIZE_DEBUG_SEWN")) {
+    static int count = 0;
+    BRepTools::Write(shape, (std::string(dump) + std::to_string(count++) + ".brep").c_str());
+  }
   if (shape.ShapeType() == TopAbs_FACE) {  // a single face (a whole sphere) is sewn to itself
     BRep_Builder builder;
     TopoDS_Shell shell;
@@ -2038,7 +2100,8 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   const bool closed = !shells.empty() && shell_faces == faces && !has_free_edges(shape);
   result.closed = closed;
   if (closed) shape = solids_from_shells(shells);
-  if (options.unify && closed) {
+  // (Not with facets: merging thousands of them takes minutes.)
+  if (options.unify && closed && !with_facet) {
     // Merging is a refinement: where OCCT's merging fails (it faults on some edges) or leaves an
     // invalid face (a circle cut where a sphere cap's seam met it, whose pcurve then wraps the
     // wrong way) of a valid solid, the faces stay as they are. Only on a closed solid: on an open
@@ -2177,7 +2240,15 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
                      (!collapsed_[c] && curves_[c].curve.IsNull());
     }
     place_polylines();
-    if (build_round(result, options) || all) break;
+    const bool done = build_round(result, options);
+    if (std::getenv("IDEALIZE_DEBUG_ROUNDS")) {
+      std::fprintf(stderr, "round %d: faceted %d, solid %d closed %d valid %d, failed %zu:", round,
+                   static_cast<int>(std::count(faceted_.begin(), faceted_.end(), 1)), result.solid, result.closed,
+                   result.valid, failed_.size());
+      for (const auto& [r, why] : failed_) std::fprintf(stderr, " %d(%s)", r, why.substr(0, 40).c_str());
+      std::fprintf(stderr, "\n");
+    }
+    if (done || all) break;
     bool more = false;
     for (const auto& [r, why] : failed_)
       if (!faceted_[r]) {

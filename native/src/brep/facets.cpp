@@ -56,6 +56,8 @@ FacetBuilder::FacetBuilder(const TriangleMesh& mesh) : mesh_(mesh), flat_(mesh.n
 }
 
 void FacetBuilder::share(int v, const TopoDS_Vertex& vertex) {
+  const auto [first, added] = shared_.try_emplace(vertex.TShape().get(), v);
+  if (!added) alias_[v] = first->second;
   vertices_[v] = vertex;
   const gp_Pnt p = BRep_Tool::Pnt(vertex);
   positions_[v] = Eigen::Vector3d(p.X(), p.Y(), p.Z());
@@ -93,6 +95,9 @@ TopoDS_Edge FacetBuilder::edge(int a, int b, int sheet) {
 
 std::vector<TopoDS_Edge> FacetBuilder::path(int a, int b, int sheet) {
   std::vector<TopoDS_Edge> out;
+  a = alias(a);
+  b = alias(b);
+  if (a == b) return out;
   if (const auto middle = middle_.find(edge_key(a, b)); middle != middle_.end() && sheet == 0) {
     for (int end : {middle->second, b}) {
       const std::vector<TopoDS_Edge> part = path(a, end);
@@ -108,7 +113,8 @@ std::vector<TopoDS_Edge> FacetBuilder::path(int a, int b, int sheet) {
 
 std::optional<TopoDS_Face> FacetBuilder::facet(int f) {
   if (flat_[f]) return std::nullopt;
-  const std::array<int, 3> corner = {mesh_.F(f, 0), mesh_.F(f, 1), mesh_.F(f, 2)};
+  const std::array<int, 3> corner = {alias(mesh_.F(f, 0)), alias(mesh_.F(f, 1)), alias(mesh_.F(f, 2))};
+  if (corner[0] == corner[1] || corner[1] == corner[2] || corner[2] == corner[0]) return std::nullopt;
   const Eigen::Vector3d a = position(corner[0]), b = position(corner[1]), c = position(corner[2]);
   const Eigen::Vector3d normal = (b - a).cross(c - a);
   // Collinear within rounding: the plane would be undefined.

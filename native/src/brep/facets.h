@@ -37,6 +37,8 @@ class FacetBuilder {
   // neighbouring feature's surface). Only before the vertex is first used.
   void place(int v, const Eigen::Vector3d& p) { positions_[v] = p; }
   // Uses `vertex` (a corner that analytic edges end at too) for mesh vertex `v`, at its point.
+  // Mesh vertices given one vertex (corners that the surfaces put at one point) are one vertex of
+  // the facets too: their edges to a third vertex are one edge, and a triangle between them none.
   void share(int v, const TopoDS_Vertex& vertex);
 
   Eigen::Vector3d position(int v) const;
@@ -54,6 +56,12 @@ class FacetBuilder {
   const TriangleMesh& mesh_;
   std::unordered_map<int, Eigen::Vector3d> positions_;
   std::unordered_map<int, TopoDS_Vertex> vertices_;
+  std::unordered_map<int, int> alias_;                       // mesh vertex -> the one standing for it
+  std::unordered_map<const void*, int> shared_;              // shared vertex -> its first mesh vertex
+  int alias(int v) const {
+    const auto it = alias_.find(v);
+    return it == alias_.end() ? v : it->second;
+  }
   std::unordered_map<std::int64_t, TopoDS_Edge> edges_;  // by (smaller, larger) vertex, oriented so
   std::unordered_map<std::int64_t, int> sheet_;          // half-edge 3 f + c -> its pair on a non-manifold edge
   std::unordered_map<std::int64_t, int> middle_;         // (smaller, larger) -> the collinear vertex on it
