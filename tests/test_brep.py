@@ -1025,3 +1025,66 @@ def test_scanned_fillets_meet_their_planes_at_the_corners(name):
     assert solid.surface_types == shapes.benchmark_truth(name)["surface_types"]
     assert solid.max_tolerance <= layer.distance_tolerance
     assert_faces_mesh(solid)
+
+
+@needs_freecad
+def test_a_region_no_surface_explains_becomes_facets_and_the_solid_closes():
+    """Graceful degradation: the box's hole marked freeform gets no fitted surface (a tube is no
+    height field, and a profile that wraps round an axis gets no B-spline), and no feature explains
+    its region. It becomes its own triangles as planar facets, the planes around it stay analytic,
+    bounded by the mesh's polyline there, and the solid closes with the mesh's volume: no face is
+    dropped (before: the hole had no face and the shell did not close)."""
+    import copy
+    layer, solid = solid_of(box_with_hole(), tolerance=0.05)
+    assert solid.solid and all(r["kind"] == "analytic" for r in solid.regions)
+    assert solid.analytic_area_fraction == pytest.approx(1.0)
+    broken = copy.copy(layer)
+    broken.features = copy.deepcopy(layer.features)
+    hole = next(f for f in broken.features if f["type"] == "cylinder")
+    hole["type"], hole["params"] = "freeform", {}
+    degraded = idealize.make_solid(broken)
+    assert degraded.solid and degraded.valid and degraded.closed, degraded.problems
+    kinds = {r["feature"]: r["kind"] for r in degraded.regions}
+    assert kinds[hole["id"]] == "faceted"
+    assert sum(k == "analytic" for k in kinds.values()) == 6
+    assert "no surface explains it" in next(r for r in degraded.regions if r["feature"] == hole["id"])["reason"]
+    V, F = layer.mesh.vertices, layer.oriented_faces
+    mesh_volume = np.einsum("ij,ij->i", V[F[:, 0]], np.cross(V[F[:, 1]], V[F[:, 2]])).sum() / 6
+    assert degraded.volume == pytest.approx(mesh_volume, rel=1e-3)
+    assert 0.5 < degraded.analytic_area_fraction < 1.0
+    assert degraded.surface_types["plane"] == 6 and degraded.surface_types["facet"] > 16
+    report = degraded.report()
+    assert report["faces_by_kind"] == {"analytic": 6, "bspline": 0, "faceted": 1}
+    assert report["faceted"][0]["feature"] == hole["id"]
+
+
+@needs_freecad
+def test_two_bodies_in_one_mesh_give_a_compound_of_two_solids():
+    """A mesh of two separate boxes (an assembly exported as one file) is two bodies: each closes
+    into a solid of its own, and their volumes add up."""
+    FreeCAD, Part, _ = shapes.freecad()
+    pair = Part.makeBox(10, 10, 10).fuse(Part.makeBox(5, 5, 5, FreeCAD.Vector(20, 0, 0)))
+    layer, solid = solid_of(pair, tolerance=0.05)
+    assert solid.solid and solid.valid, solid.problems
+    assert solid.volume == pytest.approx(1000 + 125, rel=1e-6)
+    assert solid.part_shape().ShapeType == "Compound" and len(solid.part_shape().Solids) == 2
+
+
+@needs_freecad
+@shapes.needs_shared_data
+@pytest.mark.parametrize("name", ["casting.stl", "fandisk.obj", "joint.stl", "abc_00000050_trimesh_000.stl"])
+def test_real_closed_meshes_give_valid_solids(name):
+    """Real meshes nobody here wrote (CAD tessellations and an assembly of three parts; one has
+    edges where two sheets touch, another regions that no feature explains): each gives a valid
+    closed solid, with the mesh's volume within the area times the distance tolerance, and says
+    which regions are faceted and why."""
+    mesh = idealize.load_mesh(str(shapes.SHARED_STEP.parent / "mesh" / name))
+    layer = idealize.idealize(mesh)
+    solid = idealize.make_solid(layer)
+    assert solid.solid and solid.valid and solid.closed, solid.problems[:5]
+    V, F = mesh.vertices, layer.oriented_faces
+    mesh_volume = abs(np.einsum("ij,ij->i", V[F[:, 0]], np.cross(V[F[:, 1]], V[F[:, 2]])).sum() / 6)
+    area = shapes.triangle_areas(V, F).sum()
+    assert abs(solid.volume - mesh_volume) <= area * layer.distance_tolerance
+    assert all(r["reason"] for r in solid.regions if r["kind"] == "faceted")
+    assert 0.0 <= solid.analytic_area_fraction <= 1.0

@@ -78,8 +78,6 @@
 #include <exception>
 #include <functional>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <map>
 #include <memory>
@@ -839,7 +837,7 @@ class BrepBuilder {
   TriangleMesh clean_;                      // the mesh without degenerate triangles
   std::vector<std::vector<int>> region_faces_;
   std::vector<ChainCurve> curves_;          // per chain, computed once
-  std::vector<char> faceted_, polyline_;
+  std::vector<char> faceted_, bounded_, polyline_;
   std::vector<std::string> facet_reason_;   // per region: why it is faceted
   std::unique_ptr<FacetBuilder> facets_;
   std::map<int, std::vector<TopoDS_Edge>> chain_pieces_;  // polyline chain -> its edges, along it
@@ -850,6 +848,7 @@ class BrepBuilder {
     if (region >= 0) failed_.try_emplace(region, why);
   }
   void place_polylines();
+  std::vector<int> polyline_vertices(size_t chain) const;
   bool build_round(BrepResult& result, const BrepOptions& options);
 };
 
@@ -1177,6 +1176,16 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
     corner_points_[front] = ends->first;
     corner_points_[back] = ends->second;
   }
+  // A corner stays near the mesh's: where its surfaces meet farther from it than twice the longest
+  // mesh edge there (about as far as a scan's rounded corner or a CAD export's long facets put it
+  // from the sharp one), they do not meet there, and the mesh's corner is the vertex.
+  for (int v : topo_.corners) {
+    const Vec3 x0 = mesh_.V.row(v).transpose();
+    double reach = tol_;
+    for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f)
+      for (int k = 0; k < 3; ++k) reach = std::max(reach, 2.0 * (mesh_.V.row(mesh_.F(*f, k)).transpose() - x0).norm());
+    if (!((corner_points_[v] - x0).norm() <= reach)) corner_points_[v] = x0;
+  }
   // Corners that the surfaces put at one point (four features meeting where the mesh shows two
   // corners joined by a short chain) are one vertex, and the chain between them no edge.
   std::map<int, int> parent;
@@ -1413,6 +1422,28 @@ void BrepBuilder::place_polylines() {
   }
 }
 
+// The vertices of a polyline chain. Beside a facet, all of them (the facets use them). Between two
+// analytic faces, those that advance along the chain once moved onto both surfaces, at least a
+// tolerance apart: noisy border vertices projected onto the surfaces' intersection may step back
+// along it, and the edge would cross itself.
+std::vector<int> BrepBuilder::polyline_vertices(size_t c) const {
+  const BoundaryChain& chain = topo_.chains[c];
+  const bool facet_beside = faceted_[chain.left] || (chain.right >= 0 && faceted_[chain.right]);
+  if (facet_beside || chain.vertices.size() < 3) return chain.vertices;
+  std::vector<int> kept = {chain.vertices.front()};
+  const size_t n = chain.vertices.size();
+  const Vec3 end = facets_->position(chain.vertices.back());
+  for (size_t i = 1; i + 1 < n; ++i) {
+    const Vec3 last = facets_->position(kept.back()), p = facets_->position(chain.vertices[i]);
+    const Vec3 along = chain.closed ? Vec3(clean_.V.row(chain.vertices[i + 1]) - clean_.V.row(chain.vertices[i - 1])).eval()
+                                    : (end - last).eval();
+    const bool advances = (p - last).dot(along) > 0.0 && (chain.closed || (end - p).norm() < (end - last).norm());
+    if (advances && (p - last).norm() > tol_ && (chain.closed || (end - p).norm() > tol_)) kept.push_back(chain.vertices[i]);
+  }
+  kept.push_back(chain.vertices.back());
+  return kept;
+}
+
 void BrepBuilder::make_edges(BrepResult& result) {
   BRep_Builder builder;
   const size_t chains = topo_.chains.size();
@@ -1428,8 +1459,9 @@ void BrepBuilder::make_edges(BrepResult& result) {
     const ChainCurve& edge_curve = curves_[c];
     if (polyline_[c]) {
       std::vector<TopoDS_Edge>& pieces = chain_pieces_[c];
-      for (size_t i = 0; i + 1 < chain.vertices.size(); ++i)
-        for (const TopoDS_Edge& piece : facets_->path(chain.vertices[i], chain.vertices[i + 1])) pieces.push_back(piece);
+      const std::vector<int> kept = polyline_vertices(c);
+      for (size_t i = 0; i + 1 < kept.size(); ++i)
+        for (const TopoDS_Edge& piece : facets_->path(kept[i], kept[i + 1])) pieces.push_back(piece);
       edge_ok_[c] = 1;
       BrepEdge report = edge_curve.report;
       report.a = topo_.region_feature[chain.left];
@@ -1662,7 +1694,8 @@ void BrepBuilder::make_faces(BrepResult& result) {
       for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) {
         add_pcurves.FixAddPCurve(TopoDS::Edge(e.Current()), face, Standard_False, tol_);
       }
-      if (region_winds_[r])
+      // (A polyline's pieces are projected one by one, each into the period nearest the surface's.)
+      if (region_winds_[r] || (bounded_[r] && region_surfaces_[r]->IsUPeriodic()))
         for (TopExp_Explorer w(face, TopAbs_WIRE); w.More(); w.Next()) continue_pcurves(TopoDS::Wire(w.Current()), face);
       faces_.push_back(outward ? face : TopoDS::Face(face.Reversed()));
       face_region_.push_back(static_cast<int>(r));
@@ -1752,11 +1785,22 @@ std::string shell_face_fault(const TopoDS_Shape& face, double size) {
 // leaves without triangles (at `deflection`) and FreeCAD's check rejects. Faces of less area than
 // `tolerance` squared (slivers a CAD export keeps) are not judged. (The boolean operations' checks
 // of shell_face_fault also reject sound faces whose arcs meet tangentially.)
-std::vector<std::string> closed_shell_faults(const TopoDS_Shape& shape, double deflection, double tolerance) {
+std::vector<std::string> closed_shell_faults(const TopoDS_Shape& shape, double deflection, double tolerance,
+                                             const std::function<bool(const TopoDS_Face&)>& sound = {}) {
   std::vector<std::string> faults;
-  BRepMesh_IncrementalMesh mesher(shape, deflection, Standard_False, 0.5, Standard_True);
+  // (Faces sound by construction, planar facets, are neither meshed nor judged.)
+  BRep_Builder builder;
+  TopoDS_Compound judged;
+  builder.MakeCompound(judged);
+  for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next())
+    if (!sound || !sound(TopoDS::Face(e.Current()))) builder.Add(judged, e.Current());
+  BRepMesh_IncrementalMesh mesher(judged, deflection, Standard_False, 0.5, Standard_True);
   for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
     const TopoDS_Face& face = TopoDS::Face(e.Current());
+    if (sound && sound(face)) {
+      faults.emplace_back();
+      continue;
+    }
     GProp_GProps area;
     BRepGProp::SurfaceProperties(face.Oriented(TopAbs_FORWARD), area);
     TopLoc_Location location;
@@ -1768,7 +1812,7 @@ std::vector<std::string> closed_shell_faults(const TopoDS_Shape& shape, double d
     else
       faults.emplace_back();
   }
-  BRepTools::Clean(shape);  // (the mesh stays out of the shape, as in triangulate)
+  BRepTools::Clean(judged);  // (the mesh stays out of the shape, as in triangulate)
   return faults;
 }
 
@@ -2033,7 +2077,6 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     }
     progress.step(1.0);
     result.valid = is_valid(shape, true);
-    if (const char* dump = std::getenv("IDEALIZE_DEBUG_DUMP")) BRepTools::Write(shape, dump);
     return shape;
   }
   // The analytic faces are sewn; the facets, which share their edges and vertices exactly, are not
@@ -2077,10 +2120,6 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
   progress.step(0.8);
   TopoDS_Shape shape = sewing.SewedShape();
   if (with_facet) shape = with_facets(shape, sewing, *healed);
-  if (const char* dump = std::getenv("IDEALIZE_DEBUG_SEWN")) {
-    static int count = 0;
-    BRepTools::Write(shape, (std::string(dump) + std::to_string(count++) + ".brep").c_str());
-  }
   if (shape.ShapeType() == TopAbs_FACE) {  // a single face (a whole sphere) is sewn to itself
     BRep_Builder builder;
     TopoDS_Shell shell;
@@ -2216,12 +2255,14 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   }
   compute_curves();
   stage(result, "brep.edges", since);
-  // Graceful degradation, region by region: a region whose face fails (not made, not valid, or
-  // where the shell does not close) is made of its triangles in the next round, and the chains
-  // beside it run along the mesh's border. Each round facets at least one more region; the last
-  // facets them all, which closes whenever the mesh does.
-  constexpr int kRounds = 4;  // analytic attempts before every region is faceted (a time budget)
+  // Graceful degradation, region by region. A region whose face fails (not made, not valid, or
+  // where the shell does not close) is first bounded by the mesh's border between it and its
+  // neighbours, moved onto their surfaces (its own surface stays); where it fails again, it is made
+  // of its triangles. Each round degrades at least one more region; the last facets them all, which
+  // closes whenever the mesh does.
+  constexpr int kRounds = 5;  // attempts before every region is faceted (a time budget)
   faceted_.assign(regions, 0);
+  bounded_.assign(regions, 0);
   facet_reason_.assign(regions, "");
   for (int r = 0; r < regions; ++r)
     if (region_surfaces_[r].IsNull()) {
@@ -2236,26 +2277,24 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     polyline_.assign(topo_.chains.size(), 0);
     for (size_t c = 0; c < topo_.chains.size(); ++c) {
       const BoundaryChain& chain = topo_.chains[c];
-      polyline_[c] = faceted_[chain.left] || (chain.right >= 0 && faceted_[chain.right]) ||
+      polyline_[c] = faceted_[chain.left] || bounded_[chain.left] ||
+                     (chain.right >= 0 && (faceted_[chain.right] || bounded_[chain.right])) ||
                      (!collapsed_[c] && curves_[c].curve.IsNull());
     }
     place_polylines();
     const bool done = build_round(result, options);
-    if (std::getenv("IDEALIZE_DEBUG_ROUNDS")) {
-      std::fprintf(stderr, "round %d: faceted %d, solid %d closed %d valid %d, failed %zu:", round,
-                   static_cast<int>(std::count(faceted_.begin(), faceted_.end(), 1)), result.solid, result.closed,
-                   result.valid, failed_.size());
-      for (const auto& [r, why] : failed_) std::fprintf(stderr, " %d(%s)", r, why.substr(0, 40).c_str());
-      std::fprintf(stderr, "\n");
-    }
     if (done || all) break;
     bool more = false;
-    for (const auto& [r, why] : failed_)
-      if (!faceted_[r]) {
-        faceted_[r] = 1;
-        facet_reason_[r] = why;
-        more = true;
+    for (const auto& [r, why] : failed_) {
+      if (faceted_[r]) continue;
+      more = true;
+      if (!bounded_[r] && !region_surfaces_[r].IsNull()) {
+        bounded_[r] = 1;
+        continue;
       }
+      faceted_[r] = 1;
+      facet_reason_[r] = why;
+    }
     if (!more || round + 1 >= kRounds)
       for (int r = 0; r < regions; ++r)
         if (!faceted_[r]) {
@@ -2311,7 +2350,9 @@ bool BrepBuilder::build_round(BrepResult& result, const BrepOptions& options) {
   if (result.solid && closed_faults.empty()) {
     try {
       OCC_CATCH_SIGNALS
-      closed_faults = closed_shell_faults(shape, 0.01 * diagonal_, tol_);
+      closed_faults = closed_shell_faults(shape, 0.01 * diagonal_, tol_, [&](const TopoDS_Face& face) {
+        return facet_region_.count(BRep_Tool::Surface(face).get()) != 0;
+      });
     } catch (const Standard_Failure& failure) {
       result.problems.push_back({-1, occt_message(failure, "the solid's faces could not be meshed")});
       result.solid = false;  // (no face to blame: the boolean operations' checks decide what stays)
