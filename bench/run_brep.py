@@ -120,6 +120,8 @@ def bench_mesh(m, gt: Dict, idealize, workdir: Path, builtin: bool) -> Dict:
                visible_types_equal=solid.solid and solid.surface_types in (gt["surface_types"],
                                                                             gt["visible_surface_types"]),
                volume=solid.volume, problems=len(solid.problems),
+               analytic_area_fraction=solid.analytic_area_fraction,
+               faces_by_kind={k: sum(r["kind"] == k for r in solid.regions) for k in ("analytic", "bspline", "faceted")},
                failed_features=len(solid.failed_features()), features=len(run["layer"].features),
                identify_seconds=run["identify_seconds"], brep_seconds=run["brep_seconds"],
                step_seconds=run["step_seconds"], total_seconds=run["total_seconds"],
@@ -155,6 +157,9 @@ def summarize(rows: List[Dict]) -> Dict:
             "meshes": len(vr), "solid": len(solid), "types_equal": len(good),
             "visible_types_equal": sum(r["visible_types_equal"] for r in solid),
             "faces_equal": sum(r["faces"] == r["gt_faces"] for r in solid),
+            "analytic_area_fraction_median": _median([r["analytic_area_fraction"] for r in ok]),
+            "analytic_at_least_99%": sum(r["analytic_area_fraction"] >= 0.99 for r in solid),
+            "analytic_at_least_90%": sum(r["analytic_area_fraction"] >= 0.90 for r in solid),
             "tight": sum(r["max_tolerance"] <= 1.0 for r in solid),
             "volume_error_median": _median([r["volume_error"] for r in solid]),
             "volume_error_max_good": max((r["volume_error"] for r in good), default=None),
@@ -204,6 +209,31 @@ def bench_scaling(idealize, workdir: Path, with_builtin: bool) -> Dict:
     return out
 
 
+def bench_real(idealize) -> List[Dict]:
+    """The real meshes of the test data (no ground truth): whether each gives a valid closed solid,
+    and how much of it is analytic."""
+    rows = []
+    for entry in datasets.load_real_meshes():
+        row: Dict = {"name": entry["name"]}
+        try:
+            mesh = idealize.load_mesh(entry["path"])
+            start = time.perf_counter()
+            layer = idealize.idealize(mesh)
+            identified = time.perf_counter()
+            solid = idealize.make_solid(layer)
+            row.update(ok=True, triangles=int(len(mesh.faces)), features=len(layer.features), solid=bool(solid.solid),
+                       closed=bool(solid.closed), faces=int(solid.faces), analytic_area_fraction=solid.analytic_area_fraction,
+                       faces_by_kind={k: sum(r["kind"] == k for r in solid.regions) for k in ("analytic", "bspline", "faceted")},
+                       identify_seconds=identified - start, brep_seconds=solid.timings["brep"])
+        except Exception as exc:  # report, never abort the benchmark
+            row.update(ok=False, error=f"{type(exc).__name__}: {exc}")
+        log(f"  real {row['name']:32s} " + (f"{'solid' if row['solid'] else 'NO SOLID'}  analytic "
+                                             f"{_pct(row['analytic_area_fraction'])}  brep {row['brep_seconds']:.2f} s"
+                                             if row.get("ok") else f"FAILED {row['error']}"))
+        rows.append(row)
+    return rows
+
+
 def _pct(x, digits=3) -> str:
     return "–" if x is None else f"{100 * x:.{digits}g} %"
 
@@ -227,6 +257,9 @@ def markdown(results: Dict) -> str:
         "(those segmentation scores)",
         lambda x: f"{x['visible_types_equal']}/{x['meshes']}")
     row("... with its face count", lambda x: f"{x['faces_equal']}/{x['meshes']}")
+    row("... with at least 99 % / 90 % of the area on analytic faces",
+        lambda x: f"{x['analytic_at_least_99%']} / {x['analytic_at_least_90%']}")
+    row("analytic area fraction, median", lambda x: _pct(x["analytic_area_fraction_median"]))
     row("... whose widest gap between faces (vertex or edge tolerance) is within the distance tolerance",
         lambda x: f"{x['tight']}/{x['meshes']}")
     row("volume error, median over solids", lambda x: _pct(x["volume_error_median"]))
@@ -262,6 +295,18 @@ def markdown(results: Dict) -> str:
             lines.append(f"| {Path(entry.get('part', datasets.SCALING_PART)).stem} | {entry['triangles']} | "
                          f"{entry['total_seconds']:.2f} s | {entry['brep_seconds']:.3f} s | "
                          f"{entry['step_seconds']:.3f} s | {entry['solid']} | {entry['faces']} | {size} | {fc} |")
+    if results.get("real"):
+        lines += ["", "Real meshes of the test data (`../shared/data/mesh`, no ground truth):", "",
+                  "| mesh | triangles | features | valid closed solid | analytic area | regions analytic / bspline / faceted | B-rep |",
+                  "|---|---|---|---|---|---|---|"]
+        for r in results["real"]:
+            if not r.get("ok"):
+                lines.append(f"| {r['name']} | | | {r['error']} | | | |")
+                continue
+            k = r["faces_by_kind"]
+            lines.append(f"| {r['name']} | {r['triangles']} | {r['features']} | {r['solid']} | "
+                         f"{_pct(r['analytic_area_fraction'])} | {k['analytic']} / {k['bspline']} / {k['faceted']} | "
+                         f"{r['brep_seconds']:.2f} s |")
     lines += ["", "Per mesh: bench/results/brep.json."]
     return "\n".join(lines)
 
@@ -298,6 +343,8 @@ def main(argv=None) -> int:
                 log(f"  {m.name:42s} FAILED {row['error']}")
         results["parts"] = rows
         results["summary"] = summarize(rows)
+        if not args.only:
+            results["real"] = bench_real(idealize)
         if not partial:
             results["scaling"] = bench_scaling(idealize, workdir, not args.no_builtin)
     results["total_seconds"] = time.perf_counter() - start

@@ -1176,16 +1176,6 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
     corner_points_[front] = ends->first;
     corner_points_[back] = ends->second;
   }
-  // A corner stays near the mesh's: where its surfaces meet farther from it than twice the longest
-  // mesh edge there (about as far as a scan's rounded corner or a CAD export's long facets put it
-  // from the sharp one), they do not meet there, and the mesh's corner is the vertex.
-  for (int v : topo_.corners) {
-    const Vec3 x0 = mesh_.V.row(v).transpose();
-    double reach = tol_;
-    for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f)
-      for (int k = 0; k < 3; ++k) reach = std::max(reach, 2.0 * (mesh_.V.row(mesh_.F(*f, k)).transpose() - x0).norm());
-    if (!((corner_points_[v] - x0).norm() <= reach)) corner_points_[v] = x0;
-  }
   // Corners that the surfaces put at one point (four features meeting where the mesh shows two
   // corners joined by a short chain) are one vertex, and the chain between them no edge.
   std::map<int, int> parent;
@@ -2097,7 +2087,6 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     try {
       OCC_CATCH_SIGNALS
       ShapeFix_Face fix(faces_[i]);
-      fix.SetContext(healed);  // (what it replaces, for the facets that share those edges)
       // Its periodic-degenerate check dereferences a null curve on some faces (OCCT 7.6); our
       // spheres and cones have their poles and apices away from the faces anyway.
       fix.FixPeriodicDegeneratedMode() = 0;
@@ -2109,6 +2098,13 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
       ShapeFix_Edge same_parameter;
       for (TopExp_Explorer e(fix.Face(), TopAbs_EDGE); e.More(); e.Next())
         same_parameter.FixSameParameter(TopoDS::Edge(e.Current()));
+      // What it replaced, for the facets that share those edges and vertices (its own record:
+      // given one, it copies the edges it changes instead of changing them for both faces).
+      const Handle(ShapeBuild_ReShape) context = fix.Context();
+      for (const TopAbs_ShapeEnum type : {TopAbs_EDGE, TopAbs_VERTEX})
+        if (!context.IsNull())
+          for (TopExp_Explorer e(faces_[i], type); e.More(); e.Next())
+            if (const TopoDS_Shape now = context->Value(e.Current()); !now.IsSame(e.Current())) healed->Replace(e.Current(), now);
       sewing.Add(fix.Face());
     } catch (const Standard_Failure& failure) {
       result.problems.push_back({topo_.region_feature[face_region_[i]], occt_message(failure, "its face could not be healed")});
@@ -2284,22 +2280,28 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     place_polylines();
     const bool done = build_round(result, options);
     if (done || all) break;
+    // An open mesh does not close however its faces are made: only faces that fail degrade.
+    const bool open_mesh = std::any_of(topo_.chains.begin(), topo_.chains.end(),
+                                       [](const BoundaryChain& chain) { return chain.right < 0; });
+    if (open_mesh && failed_.empty()) break;
     bool more = false;
     for (const auto& [r, why] : failed_) {
       if (faceted_[r]) continue;
       more = true;
       if (!bounded_[r] && !region_surfaces_[r].IsNull()) {
         bounded_[r] = 1;
+        facet_reason_[r] = why;
         continue;
       }
       faceted_[r] = 1;
-      facet_reason_[r] = why;
+      facet_reason_[r] = facet_reason_[r].empty() ? why : facet_reason_[r] + "; bounded by the mesh's border: " + why;
     }
     if (!more || round + 1 >= kRounds)
       for (int r = 0; r < regions; ++r)
         if (!faceted_[r]) {
           faceted_[r] = 1;
-          facet_reason_[r] = "the shell did not close with its analytic face";
+          facet_reason_[r] = facet_reason_[r].empty() ? "the shell did not close with its analytic face"
+                                                      : facet_reason_[r] + "; then the shell did not close";
         }
   }
   stage(result, "brep.faces", since);
@@ -2311,7 +2313,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     face.feature = topo_.region_feature[r];
     for (int f : region_faces_[r]) face.area += areas[f];
     face.kind = faceted_[r] ? "faceted" : freeform_.count(face.feature) ? "bspline" : "analytic";
-    face.reason = facet_reason_[r];
+    face.reason = faceted_[r] ? facet_reason_[r] : "";
     total += face.area;
     if (face.kind == "analytic") analytic += face.area;
     result.regions.push_back(face);
@@ -2407,7 +2409,9 @@ bool BrepBuilder::build_round(BrepResult& result, const BrepOptions& options) {
   if (!result.closed) {
     result.problems.push_back({-1, "the faces do not close into a solid (free edges remain)"});
   }
-  if (!result.closed && failed_.empty()) {
+  const bool open_mesh = std::any_of(topo_.chains.begin(), topo_.chains.end(),
+                                     [](const BoundaryChain& chain) { return chain.right < 0; });
+  if (!result.closed && failed_.empty() && !open_mesh) {
     // No face failed on its own: the faces along the free edges.
     TopTools_IndexedDataMapOfShapeListOfShape faces_of_edge;
     TopExp::MapShapesAndUniqueAncestors(shape, TopAbs_EDGE, TopAbs_FACE, faces_of_edge);
