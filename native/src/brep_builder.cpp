@@ -2277,8 +2277,21 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
                      (chain.right >= 0 && (faceted_[chain.right] || bounded_[chain.right])) ||
                      (!collapsed_[c] && curves_[c].curve.IsNull());
     }
-    place_polylines();
-    const bool done = build_round(result, options);
+    bool done = false;
+    try {
+      OCC_CATCH_SIGNALS
+      place_polylines();
+      done = build_round(result, options);
+    } catch (const Standard_Failure& failure) {
+      // A round that OpenCASCADE gives up on: every region left is faceted in the next.
+      if (all) throw;
+      for (int r = 0; r < regions; ++r)
+        if (!faceted_[r]) {
+          faceted_[r] = 1;
+          facet_reason_[r] = occt_message(failure, "the construction failed");
+        }
+      continue;
+    }
     if (done || all) break;
     // An open mesh does not close however its faces are made: only faces that fail degrade.
     const bool open_mesh = std::any_of(topo_.chains.begin(), topo_.chains.end(),

@@ -1,0 +1,134 @@
+"""Valid solids and analytic area over every part of the test data and every real mesh, for this
+checkout and a baseline checkout, two meshes at a time (one subprocess each, with a time limit):
+wins and losses part by part.
+
+    /usr/bin/python3 bench/compare_brep.py --baseline /tmp/base            # both, then the table
+    /usr/bin/python3 bench/compare_brep.py --only box --variant scan       # a subset, this checkout
+    /usr/bin/python3 bench/compare_brep.py --table new.json old.json       # the table of two runs
+
+The baseline is another checkout with its native module built (for example `git worktree add
+/tmp/base <rev>` and `cmake -S /tmp/base -B /tmp/base/build && cmake --build /tmp/base/build`).
+Results go to bench/results/compare-brep-*.json and the table to standard output.
+"""
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import os
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+BENCH = Path(__file__).resolve().parent
+REPO = BENCH.parent
+RESULTS = BENCH / "results"
+
+
+def one(repo: str, kind: str, name: str, variant: str) -> None:
+    """Convert one mesh with the checkout at `repo`; prints one JSON row."""
+    sys.path.insert(0, repo)
+    sys.path.insert(1, str(BENCH))
+    import idealize
+    if kind == "real":
+        mesh = idealize.load_mesh(name)
+    else:
+        import datasets
+        m = datasets.load_part(datasets.step_files_by_name()[name], [variant], log=lambda s: None)[0]
+        mesh = idealize.Mesh(m.V, m.F)
+    start = time.perf_counter()
+    layer = idealize.idealize(mesh)
+    identified = time.perf_counter()
+    solid = idealize.make_solid(layer)
+    row = dict(solid=bool(solid.solid), valid=bool(solid.valid), closed=bool(solid.closed), faces=int(solid.faces),
+               features=len(layer.features), volume=float(solid.volume), identify=identified - start,
+               brep=float(solid.timings["brep"]))
+    if hasattr(solid, "regions"):
+        row["aaf"] = solid.analytic_area_fraction
+        row["kinds"] = {k: sum(r["kind"] == k for r in solid.regions) for k in ("analytic", "bspline", "faceted")}
+    print("ROW " + json.dumps(row))
+
+
+def run(repo: str, tasks, timeout: float):
+    def convert(task):
+        started = time.time()
+        try:
+            done = subprocess.run([sys.executable, __file__, "--one", repo, *task], capture_output=True, text=True,
+                                  timeout=timeout)
+            rows = [line[4:] for line in done.stdout.splitlines() if line.startswith("ROW ")]
+            row = json.loads(rows[0]) if rows else {"error": (done.stderr.strip().splitlines() or ["?"])[-1][:200]}
+        except subprocess.TimeoutExpired:
+            row = {"error": "timeout"}
+        row.update(kind=task[0], name=os.path.basename(task[1]), variant=task[2], seconds=time.time() - started)
+        print(json.dumps(row), flush=True)
+        return row
+
+    with ThreadPoolExecutor(2) as pool:
+        return list(pool.map(convert, tasks))
+
+
+def table(new, old) -> str:
+    base = {(r["name"], r["variant"]): r for r in old}
+    agg = collections.defaultdict(collections.Counter)
+    lines = ["| part | variant | before | after | analytic area | regions analytic / bspline / faceted | B-rep s before / after |",
+             "|---|---|---|---|---|---|---|"]
+    state = lambda r: "error" if "error" in r else ("solid" if r.get("solid") else "no")  # noqa: E731
+    for r in sorted(new, key=lambda r: (r["name"], r["variant"])):
+        b = base.get((r["name"], r["variant"]), {})
+        a = agg[r["variant"]]
+        a["meshes"] += 1
+        a["before"] += bool(b.get("solid"))
+        a["after"] += bool(r.get("solid"))
+        a["won"] += bool(r.get("solid")) and not b.get("solid")
+        a["lost"] += bool(b.get("solid")) and not r.get("solid")
+        a["99"] += bool(r.get("solid")) and r.get("aaf", 0) >= 0.99
+        a["90"] += bool(r.get("solid")) and r.get("aaf", 0) >= 0.90
+        k = r.get("kinds") or {}
+        lines.append(f"| {r['name']} | {r['variant']} | {state(b)} | {state(r)} | {100 * r.get('aaf', 0):.1f} % | "
+                     f"{k.get('analytic', '')} / {k.get('bspline', '')} / {k.get('faceted', '')} | "
+                     f"{b.get('brep', 0):.2f} / {r.get('brep', 0):.2f} |")
+    summary = ["| variant | meshes | valid closed solid before | after | won | lost | after, >= 99 % / >= 90 % of the area analytic |",
+               "|---|---|---|---|---|---|---|"]
+    for v in ("cad", "scan", "sculpt", "real"):
+        a = agg[v]
+        if a["meshes"]:
+            summary.append(f"| {v} | {a['meshes']} | {a['before']} | {a['after']} | {a['won']} | {a['lost']} | {a['99']} / {a['90']} |")
+    return "\n".join(summary + [""] + lines)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--one", nargs=4, help=argparse.SUPPRESS)
+    parser.add_argument("--baseline", help="another checkout to run in the same run")
+    parser.add_argument("--only", action="append", metavar="NAME")
+    parser.add_argument("--variant", action="append", choices=("cad", "scan", "sculpt"))
+    parser.add_argument("--timeout", type=float, default=900, help="seconds per mesh")
+    parser.add_argument("--table", nargs=2, metavar=("NEW", "OLD"))
+    args = parser.parse_args()
+    if args.one:
+        one(*args.one)
+        return 0
+    if args.table:
+        print(table(json.loads(Path(args.table[0]).read_text()), json.loads(Path(args.table[1]).read_text())))
+        return 0
+    sys.path.insert(0, str(BENCH))
+    import datasets
+    tasks = [("part", name, v) for name in sorted(datasets.step_files_by_name())
+             if not args.only or any(k in name for k in args.only) for v in (args.variant or ("cad", "scan", "sculpt"))]
+    if not args.only and not args.variant:
+        tasks += [("real", m["path"], "real") for m in datasets.load_real_meshes()]
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    new = run(str(REPO), tasks, args.timeout)
+    (RESULTS / "compare-brep-new.json").write_text(json.dumps(new, indent=0))
+    old = []
+    if args.baseline:
+        old = run(args.baseline, tasks, args.timeout)
+        (RESULTS / "compare-brep-baseline.json").write_text(json.dumps(old, indent=0))
+    print(table(new, old))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
