@@ -48,6 +48,11 @@ def one(repo: str, kind: str, name: str, variant: str) -> None:
     if hasattr(solid, "regions"):
         row["aaf"] = solid.analytic_area_fraction
         row["kinds"] = {k: sum(r["kind"] == k for r in solid.regions) for k in ("analytic", "bspline", "faceted")}
+    if hasattr(solid, "deviation_bound"):  # honest validity, relative to the mesh's diagonal
+        import numpy as np
+        diagonal = float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
+        row.update(mesh_to_solid=solid.mesh_to_shape / diagonal, solid_to_mesh=solid.shape_to_mesh / diagonal,
+                   bound=solid.deviation_bound / diagonal, mesh_volume=solid.mesh_volume)
     print("ROW " + json.dumps(row))
 
 
@@ -102,6 +107,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--one", nargs=4, help=argparse.SUPPRESS)
     parser.add_argument("--baseline", help="another checkout to run in the same run")
+    parser.add_argument("--checkout", default=str(REPO), help="the checkout to measure (default this one; a copy "
+                        "lets the run go on while this one is rebuilt)")
     parser.add_argument("--only", action="append", metavar="NAME")
     parser.add_argument("--variant", action="append", choices=("cad", "scan", "sculpt"))
     parser.add_argument("--timeout", type=float, default=900, help="seconds per mesh")
@@ -120,7 +127,7 @@ def main() -> int:
     if not args.only and not args.variant:
         tasks += [("real", m["path"], "real") for m in datasets.load_real_meshes()]
     RESULTS.mkdir(parents=True, exist_ok=True)
-    new = run(str(REPO), tasks, args.timeout)
+    new = run(args.checkout, tasks, args.timeout)
     (RESULTS / "compare-brep-new.json").write_text(json.dumps(new, indent=0))
     old = []
     if args.baseline:

@@ -20,6 +20,11 @@ class Solid:
     surface gave no valid face), the reason when faceted, and its area. analytic_area_fraction: the
     share of the mesh's area on analytic faces.
     max_deviation: largest distance from the input mesh vertices to the shape's faces.
+    Honest validity (measured by the construction on a closed valid shape, 0 otherwise):
+    mesh_to_shape and shape_to_mesh, the two-sided distance between the mesh and the faces;
+    deviation_bound, the largest distance any face was allowed from its part of the mesh (its fit,
+    or the distance of its border from the edges that replace it, plus the tolerance); mesh_volume,
+    the volume the mesh encloses. `solid` holds only within those bounds.
     max_tolerance: largest vertex or edge tolerance, the widest gap between the faces' boundaries
     that the shape bridges (beyond the layer's distance tolerance, viewers may leave faces out).
     """
@@ -38,6 +43,10 @@ class Solid:
         self.face_features = list(brep.face_features)
         self.regions = list(brep.regions)
         self.analytic_area_fraction = float(brep.analytic_area_fraction)
+        self.mesh_to_shape = float(brep.mesh_to_shape)
+        self.shape_to_mesh = float(brep.shape_to_mesh)
+        self.deviation_bound = float(brep.deviation_bound)
+        self.mesh_volume = float(brep.mesh_volume)
         self.max_deviation = max_deviation
         self.deviation_deflection = deflection
         self.timings = timings
@@ -78,6 +87,9 @@ class Solid:
             "max_deviation": float(self.max_deviation),
             "max_tolerance": float(self.max_tolerance),
             "analytic_area_fraction": float(self.analytic_area_fraction),
+            "deviation": {"mesh_to_solid": self.mesh_to_shape, "solid_to_mesh": self.shape_to_mesh,
+                          "bound": self.deviation_bound},
+            "mesh_volume": self.mesh_volume,
             "faces_by_kind": {k: sum(r["kind"] == k for r in self.regions) for k in ("analytic", "bspline", "faceted")},
             "faceted": [{"feature": int(r["feature"]), "reason": r["reason"], "area": float(r["area"])}
                         for r in self.regions if r["kind"] == "faceted"],

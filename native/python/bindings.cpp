@@ -341,6 +341,10 @@ PYBIND11_MODULE(_native, m) {
       .def_readonly("surface_types", &BrepResult::surface_types)
       .def_readonly("face_features", &BrepResult::face_features)
       .def_readonly("analytic_area_fraction", &BrepResult::analytic_area_fraction)
+      .def_readonly("mesh_to_shape", &BrepResult::mesh_to_shape)
+      .def_readonly("shape_to_mesh", &BrepResult::shape_to_mesh)
+      .def_readonly("deviation_bound", &BrepResult::deviation_bound)
+      .def_readonly("mesh_volume", &BrepResult::mesh_volume)
       .def_readonly("timings", &BrepResult::timings)
       .def_property_readonly("regions", [](const BrepResult& r) {
         py::list regions;

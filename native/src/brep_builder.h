@@ -74,6 +74,12 @@ struct BrepResult {
   std::vector<BrepEdge> edges;
   std::vector<BrepRegionFace> regions;       // per region of the labelled mesh
   double analytic_area_fraction = 0.0;       // of the mesh's area, on analytic faces
+  // Honest validity, measured on a closed valid shape (0 otherwise): the largest distance of a
+  // mesh vertex from the faces, and of a point of the faces from the mesh; the largest a region
+  // is allowed (its fit, or its border's distance from its edges, plus the tolerance); the volume
+  // the mesh encloses. A solid stays within its regions' allowances and its volume within what
+  // they account for, or it is not a solid.
+  double mesh_to_shape = 0.0, shape_to_mesh = 0.0, deviation_bound = 0.0, mesh_volume = 0.0;
   std::vector<std::pair<std::string, double>> timings;
 };
 
