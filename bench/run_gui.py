@@ -71,7 +71,7 @@ def figures(layer):
     panel = layer.ViewObject.Proxy.panel
     table = panel.form.features
     rows = [r for r in range(table.rowCount()) if table.item(r, 1).text() == "cylinder"]
-    table.selectRow(max(rows, key=lambda r: int(table.item(r, 4).text())) if rows else 0)
+    table.selectRow(max(rows, key=lambda r: panel.features[r]["triangles"]) if rows else 0)
     Gui.updateGui()
     left = panel.form.grab()
     view.saveImage(CONFIG["figure_panel"], 900, 640, "Current")

@@ -1,5 +1,5 @@
 """The fitted B-rep of a feature layer: analytic faces trimmed by the intersections of adjacent
-ideal surfaces, one solid when they close (native/src/brep_builder.h)."""
+ideal surfaces, one solid when they close (native/src/brep/brep.h)."""
 import time
 
 import numpy as np

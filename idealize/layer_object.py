@@ -208,6 +208,34 @@ class LayerRecord:
             set_colors(obj, color_mode(obj))
 
 
+def layer_record(mesh, options, mode="Type", progress=None):
+    """The :class:`LayerRecord` of :func:`idealize.idealize` of `mesh` with `options`
+    (:func:`layer_options`), colours in `mode`: all of a layer's work that needs no document, so
+    a GUI runs it in a worker thread."""
+    layer = idealize(mesh, progress=progress, **options)
+    if progress is not None:
+        progress.report("preparing the document", 1.0)
+    return LayerRecord(layer, options, mode)
+
+
+def _run_here(obj, function, *args, **kwargs):
+    return function(*args, **kwargs)
+
+
+# How a layer object runs its recompute: runner(obj, function, *args, **kwargs) returns
+# function(*args, progress=..., **kwargs), or None when the user cancelled it (the layer then keeps
+# its previous result). Without a GUI it runs in the calling thread with no progress and cannot be
+# cancelled; idealize.gui.view_layer sets one that runs it in a worker thread behind the progress
+# dialog with Cancel, as the commands do (this module imports nothing of the GUI).
+_runner = _run_here
+
+
+def set_runner(runner):
+    """Route the layers' recomputes through `runner` (None: back to the calling thread)."""
+    global _runner
+    _runner = runner or _run_here
+
+
 class _SourceWatcher:
     """Touches the feature layers of a mesh whose Mesh or Placement changed. A Mesh::Feature's
     Mesh is an output property: FreeCAD itself would not recompute the objects that use it."""
@@ -234,6 +262,8 @@ def _watch_sources():
 class FeatureLayerObject:
     """Proxy of the feature layer document object."""
 
+    Type = "IdealizeFeatureLayer"  # what is_feature_layer() asks: a class attribute, not saved
+
     def __init__(self, obj, source):
         obj.Proxy = self
         obj.addProperty("App::PropertyLink", "Source", "Idealize", "The mesh the layer was made from (never modified)")
@@ -259,21 +289,31 @@ class FeatureLayerObject:
         obj.setEditorMode("VertexDeviation", 2)
         obj.setEditorMode("FeatureTable", 2)
         obj.setEditorMode(FACE_COLORS, 2)
-        self.Type = "IdealizeFeatureLayer"
         _watch_sources()
 
     def execute(self, obj):
+        """Recompute the layer when its source or options changed, through the runner (in the GUI:
+        a worker thread behind the progress dialog, whose Cancel leaves the layer as it was)."""
         mesh = source_mesh(obj)
         options = object_options(obj)
         if obj.SourceFingerprint != fingerprint(mesh, options):
-            apply_layer(obj, idealize(mesh, **options), options)
+            record = _runner(obj, layer_record, mesh, options, color_mode(obj))
+            if record is not None:  # None: cancelled; its fingerprint still tells it is out of date
+                record.store(obj)
 
     def onDocumentRestored(self, obj):
-        self.Type = "IdealizeFeatureLayer"
         _watch_sources()
 
-    def dumps(self):
-        return None  # all state is in properties
+    # All state is in properties. FreeCAD 0.20 saves a proxy with __getstate__ when it has one,
+    # and Python 3.11 gives every object a default one (its __dict__): defined here, it is ours.
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):  # FreeCAD before 0.20 / Python before 3.11 ask these instead
+        return None
 
     def loads(self, state):
         return None

@@ -19,8 +19,9 @@ _SPEC = importlib.util.spec_from_file_location("gui_driver", os.path.join(REPO, 
 gui_driver = importlib.util.module_from_spec(_SPEC)
 _SPEC.loader.exec_module(gui_driver)
 
-# The script run() in FreeCAD's GUI (bench/gui_driver.py); CONFIG is filled in by the test.
-DRIVER = r'''
+# Helpers of the scripts run in FreeCAD's GUI (bench/gui_driver.py), shared with the other GUI
+# tests (test_gui_*.py); CONFIG is filled in by the test.
+HELPERS = r'''
 
 
 def ensure_link():
@@ -96,14 +97,37 @@ def shoot(key):
 
 
 def run_on(doc, obj, command):
-    """Run a command with obj selected; the objects it added."""
+    """Run a command with obj selected; the objects it added. Records, per run, how many objects
+    it added and what it left selected in result["selected_after"][command]."""
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(obj)
     names = {o.Name for o in doc.Objects}
     Gui.runCommand(command)
     Gui.updateGui()
-    return [o for o in doc.Objects if o.Name not in names]
+    new = [o for o in doc.Objects if o.Name not in names]
+    result.setdefault("selected_after", {}).setdefault(command, []).append(
+        [len(new), [o.Label for o in Gui.Selection.getSelection()]])
+    return new
 
+
+def report_view_text():
+    """Everything the report view shows (messages, warnings, errors and tracebacks)."""
+    from PySide import QtGui
+    views = [w for w in Gui.getMainWindow().findChildren(QtGui.QTextEdit) if w.objectName() == "Report view"]
+    return views[0].toPlainText() if views else ""
+
+
+def first_visible(kind, label=""):
+    """The first visible top-level widget of a Qt class whose label text contains `label`."""
+    from PySide import QtGui
+    for widget in QtGui.QApplication.topLevelWidgets():
+        if isinstance(widget, kind) and widget.isVisible() and label in getattr(widget, "labelText", str)():
+            return widget
+    return None
+'''
+
+# The script run() in FreeCAD's GUI.
+DRIVER = HELPERS + r'''
 
 def run():
     if ensure_link():
@@ -383,34 +407,40 @@ def run():
 '''
 
 
-def run_driver(tmp_path, attempt):
-    config = {"repo": REPO, "result": str(tmp_path / ("result%d.json" % attempt)),
-              "screenshot": str(tmp_path / "segment-gui.png"),
+def run_gui(driver, config, tmp_path, timeout=240):
+    """Run a driver script (HELPERS + its run()) in FreeCAD's GUI under xvfb-run; its result dict.
+    Skips when the tools are missing. The first run after the user Mod link was (re)created only
+    creates it: FreeCAD scans the Mod folders at start-up, so it runs a second time."""
+    for tool in ("xvfb-run", "freecad", "timeout"):
+        if shutil.which(tool) is None:
+            pytest.skip("%s is not installed; the GUI test runs FreeCAD under xvfb-run" % tool)
+    if "libasan" in os.environ.get("LD_PRELOAD", "") and os.environ.get("SANITIZE_GUI") != "1":
+        pytest.skip("tools/sanitize.sh: FreeCAD loads the workbench through its Mod link, not this sanitized "
+                    "build (SANITIZE_GUI=1 runs it anyway)")
+    for attempt in (1, 2):
+        config = dict(config, repo=REPO, result=str(tmp_path / ("result%d.json" % attempt)))
+        try:
+            result = gui_driver.run_in_freecad_gui(driver, config, tmp_path / ("driver%d.py" % attempt), timeout)
+        except gui_driver.DriverError as error:
+            pytest.fail(str(error))
+        if not result.get("restart"):
+            break
+    assert not result.get("restart"), "FreeCAD did not pick up the new link %s" % result["link"]
+    return result
+
+
+def test_segment_command_in_freecad_gui(tmp_path):
+    assert os.path.exists(SHARED_MESH), "the shared test data must sit beside the repository: %s" % SHARED_MESH
+    config = {"screenshot": str(tmp_path / "segment-gui.png"),
               "screenshot_types": str(tmp_path / "idealize-gui.png"),
               "screenshot_deviation": str(tmp_path / "deviation-gui.png"),
               "screenshot_panel": str(tmp_path / "panel-gui.png"), "fcstd": str(tmp_path / "layer.FCStd"),
               "shared_mesh": SHARED_MESH,
               "screenshot_solid": str(tmp_path / "solid-gui.png"), "step": str(tmp_path / "part.step")}
-    try:
-        return gui_driver.run_in_freecad_gui(DRIVER, config, tmp_path / ("driver%d.py" % attempt), timeout=240), config
-    except gui_driver.DriverError as error:
-        pytest.fail(str(error))
-
-
-def test_segment_command_in_freecad_gui(tmp_path):
-    for tool in ("xvfb-run", "freecad", "timeout"):
-        if shutil.which(tool) is None:
-            pytest.skip("%s is not installed; the GUI test runs FreeCAD under xvfb-run" % tool)
-    assert os.path.exists(SHARED_MESH), "the shared test data must sit beside the repository: %s" % SHARED_MESH
-
-    # The first run after the link was (re)created only creates it: FreeCAD must restart.
-    result, config = run_driver(tmp_path, 1)
-    if result.get("restart"):
-        result, config = run_driver(tmp_path, 2)
+    result = run_gui(DRIVER, config, tmp_path)
     print(json.dumps(result, indent=1))
 
     assert "exception" not in result, result["exception"]
-    assert not result.get("restart"), "FreeCAD did not pick up the new link %s" % result["link"]
     assert "IdealizeWorkbench" in result["workbenches"], "FreeCAD does not list the workbench"
     assert result["active_workbench"] == "IdealizeWorkbench"
     assert result["idealize_file"].startswith(os.path.realpath(REPO) + os.sep)
@@ -421,6 +451,10 @@ def test_segment_command_in_freecad_gui(tmp_path):
     assert result["source_after"] == result["source_before"]
     assert result["undo_names"][0] == "Segment mesh"
     assert "patches" in result["status_message"]
+    # Every command that added something left nothing selected (the highlight would hide its colours).
+    runs = [(command, run) for command, runs in result["selected_after"].items() for run in runs if run[0]]
+    assert {command for command, _ in runs} >= {"Idealize_Segment", "Idealize_SegmentIdealize", "Idealize_MakeSolid"}
+    assert all(selected == [] for _, (_, selected) in runs), runs
 
     assert result["face_colors"] == result["facets"] == result["source_before"][1]
     assert result["distinct_face_colors"] >= 4  # several patches plus red transitions
@@ -456,7 +490,7 @@ def test_segment_command_in_freecad_gui(tmp_path):
     assert result["legend_shown"] is True and result["legend_after_type"] is False
 
     panel = result["panel"]
-    assert panel["rows"] == 7 and panel["columns"] == 6 and panel["types"] == ["cylinder", "plane"]
+    assert panel["rows"] == 7 and panel["columns"] == 3 and panel["types"] == ["cylinder", "plane"]
     assert panel["options_hidden"] is True and result["options_shown"] is True
     assert "Mesh: 1 shell, closed, 0 self-intersecting triangle pairs; repaired: nothing needed" in panel["summary"]
     # Selecting the cylinder's row leaves its facets in their colour and dims all others.

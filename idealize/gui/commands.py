@@ -6,7 +6,7 @@ import FreeCADGui
 
 from .. import freecad_mesh, freecad_solid, layer_object
 from ..brep import make_solid
-from ..features import count_summary, idealize
+from ..features import count_summary
 from ..segmentation import segment
 from . import icon
 from ..progress import Cancelled
@@ -66,14 +66,43 @@ def _run(title, transaction, compute, make_result, describe, show):
     message, details = describe(computed, time.perf_counter() - start)
     FreeCAD.Console.PrintMessage(message + "\n" + "".join(line + "\n" for line in details))
     FreeCADGui.getMainWindow().statusBar().showMessage(message, 15000)
+    # Nothing selected: the selection's highlight would cover the result's colours.
     FreeCADGui.Selection.clearSelection()
-    FreeCADGui.Selection.addSelection(result)
 
 
-def _hide_source(source, result):
-    # The result lies exactly on the source: hide the source so the colours do not z-fight.
+def _link_source(obj, source):
+    """Record in obj (a coloured copy or a solid) the mesh it was made from, so that a later command
+    knows what it replaces."""
+    obj.addProperty("App::PropertyLink", "Source", "Idealize", "The mesh this was made from (never modified)")
+    obj.Source = source
+
+
+def _made_from(obj, source):
+    """True when obj shows `source`'s mesh in another form: a feature layer, a coloured copy
+    (`_Segmented`) or a solid made from it. Objects made before the Source link was recorded are
+    known by their name."""
+    if layer_object.is_feature_layer(obj):
+        return obj.Source == source
+    for marker, suffix in ((freecad_mesh.FACE_COLORS, "_Segmented"), ("IdealizeSolid", "_Solid")):
+        if hasattr(obj, marker):
+            linked = getattr(obj, "Source", None)
+            return linked == source if linked is not None else obj.Name.startswith(source.Name + suffix)
+    return False
+
+
+def _hide_replaced(source, result):
+    """Hide what `result` replaces: the source (the result lies exactly on it: colours would
+    z-fight) and every other object made from it (an earlier copy, layer or solid would cover the
+    result)."""
+    for obj in source.Document.Objects:
+        if obj != result and (obj == source or _made_from(obj, source)) and obj.ViewObject is not None:
+            obj.ViewObject.Visibility = False
+    result.ViewObject.Visibility = True
+
+
+def _show_colored(source, result):
     result.ViewObject.Coloring = True  # per-facet colours from the FaceColors property
-    source.ViewObject.Visibility = False
+    _hide_replaced(source, result)
 
 
 def _new_layer(title, source):
@@ -83,9 +112,7 @@ def _new_layer(title, source):
     kernel = source.Mesh.copy()
 
     def work(progress):
-        layer = idealize(freecad_mesh.usable_mesh(kernel), progress=progress, **options)
-        progress.report("preparing the document", 1.0)
-        return layer_object.LayerRecord(layer, options)
+        return layer_object.layer_record(freecad_mesh.usable_mesh(kernel), options, progress=progress)
 
     return run_with_progress(title, work)
 
@@ -131,11 +158,15 @@ class SegmentCommand(_MeshCommand):
             return ("Idealize: %s split into %d patches (%d transition triangles) in %.2f s" % (
                 source.Label, segmentation.n_features, int(segmentation.transition.sum()), seconds), [])
 
+        def make_result(doc, segmentation):
+            obj = freecad_mesh.make_segmented_mesh(doc, source, segmentation)
+            _link_source(obj, source)
+            return obj
+
         kernel = source.Mesh.copy()  # the worker reads a private copy, never the document
         _run("Segment", "Segment mesh",
              lambda: run_with_progress("Segment", lambda progress: segment(freecad_mesh.usable_mesh(kernel), progress)),
-             lambda doc, segmentation: freecad_mesh.make_segmented_mesh(doc, source, segmentation), describe,
-             lambda result: _hide_source(source, result))
+             make_result, describe, lambda result: _show_colored(source, result))
 
 
 class SegmentIdealizeCommand(_MeshCommand):
@@ -147,7 +178,7 @@ class SegmentIdealizeCommand(_MeshCommand):
 
     def Activated(self):
         source = _selected_mesh()
-        _add_layer("Segment & Idealize", "Segment and idealize mesh", source, lambda obj: _hide_source(source, obj))
+        _add_layer("Segment & Idealize", "Segment and idealize mesh", source, lambda obj: _show_colored(source, obj))
 
 
 class DeviationMapCommand(_LayerOrMeshCommand):
@@ -161,12 +192,15 @@ class DeviationMapCommand(_LayerOrMeshCommand):
         layer = _selected_layer()
         if layer is not None:
             layer.ViewObject.ColorBy = "Deviation"  # a view setting: not an undoable document change
+            if layer.Source is not None:
+                _hide_replaced(layer.Source, layer)
             layer.ViewObject.Visibility = True
+            FreeCADGui.Selection.clearSelection()  # the highlight would cover the deviation colours
             return
         source = _selected_mesh()
 
         def show(obj):
-            _hide_source(source, obj)
+            _show_colored(source, obj)
             obj.ViewObject.ColorBy = "Deviation"
 
         _add_layer("Deviation map", "Deviation map", source, show)
@@ -192,6 +226,7 @@ class MakeSolidCommand(_LayerOrMeshCommand):
         def make_result(doc, computed):
             layer, solid = computed
             obj, group, _ = freecad_solid.make_solid_object(doc, source, layer, solid)
+            _link_source(obj, source)
             primitives.extend(group.Group)
             return obj
 
@@ -200,9 +235,7 @@ class MakeSolidCommand(_LayerOrMeshCommand):
             # The primitives lie on the solid's faces: shown, they would hide its colours.
             for primitive in primitives:
                 primitive.ViewObject.Visibility = False
-            for hidden in (source, selected_layer):
-                if hidden is not None:
-                    hidden.ViewObject.Visibility = False
+            _hide_replaced(source, obj)  # the source, the selected layer and the others made from it
 
         def describe(computed, seconds):
             _, solid = computed

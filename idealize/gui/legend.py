@@ -23,8 +23,13 @@ BAR_LEFT, BAR_RIGHT = 0.86, 0.90   # normalized viewport coordinates, -1..1 on b
 BAR_BOTTOM, BAR_TOP = -0.34, 0.34  # a third of the view height
 TEXT_COLOR = (0.05, 0.05, 0.05)
 PLATE_COLOR = (0.95, 0.95, 0.95)
-# left, right, bottom, top; wide enough for a ~15 character title in views from ~600 px wide
-PLATE = (0.56, 0.97, -0.42, 0.50)
+# Entries below the bar (a colour that is not on the scale, e.g. freeform grey): one swatch as wide
+# as the bar per entry, ENTRY_HEIGHT tall, the first ENTRY_GAP below the bar (room for its "0").
+ENTRY_GAP, ENTRY_HEIGHT, ENTRY_SPACING = 0.10, 0.06, 0.09
+MAX_ENTRIES = 1  # the plate below is tall enough for this many (the layer needs one: freeform)
+# left, right, bottom, top; wide enough for a ~15 character title in views from ~600 px wide, and
+# tall enough for MAX_ENTRIES entries under the bar (plus a 0.02 margin)
+PLATE = (0.56, 0.97, BAR_BOTTOM - ENTRY_GAP - MAX_ENTRIES * ENTRY_SPACING - 0.02, 0.50)
 FONT = ("Sans", 13)  # Coin asks fontconfig; an unknown name falls back to Coin's built-in font
 
 
@@ -107,6 +112,9 @@ class ColorLegend:
         for node in (self._bar_coords, self._bar_colors, binding, mesh):
             bar.addChild(node)
         overlay.addChild(bar)
+        # Rebuilt by update(): the swatches of the entries below the bar (before the outlines).
+        self._entries = coin.SoSeparator()
+        overlay.addChild(self._entries)
 
         ink = coin.SoBaseColor()
         ink.rgb = TEXT_COLOR
@@ -122,10 +130,12 @@ class ColorLegend:
         overlay.addChild(self._labels)
 
         self.node.addChild(_bbox_free(overlay))
+        self.entries = []  # labels of the entries below the bar (update())
 
-    def update(self, title, top, color_at, ticks=5, unit_format="%.3g"):
+    def update(self, title, top, color_at, ticks=5, unit_format="%.3g", extra=()):
         """Show values 0..top: color_at(t) -> (r, g, b) in 0..1 for t in [0, 1]; `ticks` labels
-        evenly spaced, formatted with unit_format; `title` above the bar."""
+        evenly spaced, formatted with unit_format; `title` above the bar; `extra`: up to
+        MAX_ENTRIES (label, (r, g, b)) entries below the bar for colours off the scale."""
         rows = [i / BANDS for i in range(BANDS + 1)]
         height = BAR_TOP - BAR_BOTTOM
         points, colors = [], []
@@ -148,10 +158,20 @@ class ColorLegend:
             lines += [(BAR_LEFT - 0.012, y, 0), (BAR_LEFT, y, 0)]
             self._add_text(unit_format % (t * top), BAR_LEFT - 0.02, y - 0.012)
         self._add_text(title, BAR_RIGHT, BAR_TOP + 0.05)
+        self._entries.removeAllChildren()
+        self.entries = [label for label, _ in extra[:MAX_ENTRIES]]
+        for i, (label, rgb) in enumerate(extra[:MAX_ENTRIES]):
+            top_y = BAR_BOTTOM - ENTRY_GAP - i * ENTRY_SPACING
+            self._entries.addChild(_rectangle(BAR_LEFT, BAR_RIGHT, top_y - ENTRY_HEIGHT, top_y,
+                                              tuple(float(c) for c in rgb)))
+            lines += [(BAR_LEFT, top_y - ENTRY_HEIGHT, 0), (BAR_RIGHT, top_y - ENTRY_HEIGHT, 0), (BAR_RIGHT, top_y, 0),
+                      (BAR_LEFT, top_y, 0), (BAR_LEFT, top_y - ENTRY_HEIGHT, 0)]
+            self._add_text(label, BAR_LEFT - 0.02, top_y - ENTRY_HEIGHT / 2 - 0.012)
         self._line_coords.point.setValues(0, len(lines), lines)
         self._line_coords.point.setNum(len(lines))
-        self._lines.numVertices.setValues(0, 1 + ticks, [5] + [2] * ticks)
-        self._lines.numVertices.setNum(1 + ticks)
+        counts = [5] + [2] * ticks + [5] * len(self.entries)
+        self._lines.numVertices.setValues(0, len(counts), counts)
+        self._lines.numVertices.setNum(len(counts))
 
     def _add_text(self, text, x, y):
         """Right-aligned label ending at (x, y): text grows to the left, away from the edge."""

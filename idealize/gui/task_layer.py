@@ -1,6 +1,7 @@
-"""Task panel of the feature layer (Resources/ui/FeatureLayer.ui): the feature table with types,
-key parameters, residuals and relations; rows and facets in the 3D view select each other; the
-rarely needed options in a collapsed section."""
+"""Task panel of the feature layer (Resources/ui/FeatureLayer.ui): the feature table (id, type, key
+parameters) with the selected feature's residual, size and relations in full below it; rows and
+facets in the 3D view select each other, a double-click on a row zooms to its feature; the rarely
+needed options in a collapsed section. Laid out to fit the default combo view (about 260 px)."""
 import json
 import os
 
@@ -9,12 +10,16 @@ import numpy as np
 
 from .. import layer_object
 from ..features import idealize
-from ..freecad_mesh import mesh_check_summary
+from ..freecad_mesh import mesh_check_summary, mesh_from_freecad
 from .progress import run_with_progress
 
 UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                        "Resources", "ui", "FeatureLayer.ui")
-COLUMNS = ["Id", "Type", "Parameters", "RMS", "Triangles", "Relations"]
+# Narrow enough for the default combo view; the rest of a feature is in the details below the table.
+COLUMNS = ["Id", "Type", "Parameters"]
+# Height of the details box: at the default dock width, a feature's parameters, residual and size
+# take about three lines; a few relations fill the rest (more scroll).
+DETAILS_LINES = 5
 
 
 def key_parameters(feature):
@@ -60,11 +65,18 @@ class FeatureLayerPanel:
         self.form.colorBy.setCurrentIndex(layer_object.COLOR_MODES.index(obj.ViewObject.ColorBy))
         self.form.colorBy.currentIndexChanged.connect(self.color_by_changed)
         self.form.features.itemSelectionChanged.connect(self.row_selected)
+        # A fixed height, so the task box keeps its layout whatever the text (longer details
+        # scroll): DETAILS_LINES lines and the frame.
+        details = self.form.details
+        details.setFixedHeight(details.fontMetrics().lineSpacing() * DETAILS_LINES
+                               + 2 * (details.frameWidth() + int(details.document().documentMargin())))
+        self.form.features.cellDoubleClicked.connect(lambda row, column: self.zoom_to_feature(self.features[row]["id"]))
         self.form.optionsToggle.toggled.connect(self.toggle_options)
         self.form.recompute.clicked.connect(self.recompute)
         self.show_options()
         self.fill()
         self.labels = np.asarray(obj.Labels, dtype=np.int64)
+        self._mesh = None  # the layer's mesh, read on the first zoom
         FreeCADGui.Selection.addObserver(self)
 
     # --- content
@@ -82,14 +94,24 @@ class FeatureLayerPanel:
         widget.setColumnCount(len(COLUMNS))
         widget.setHorizontalHeaderLabels(COLUMNS)
         widget.setRowCount(len(self.features))
+        self.details = []
         for row, f in enumerate(self.features):
-            cells = [str(f["id"]), f["type"], key_parameters(f), "%.3g" % f["rms"], str(f["triangles"]),
-                     relations.get(f["id"], "")]
-            for column, text in enumerate(cells):
+            self.details.append("Feature %d, %s: %s. RMS %.3g, %d triangles.%s" % (
+                f["id"], f["type"], key_parameters(f), f["rms"], f["triangles"],
+                " Relations: %s." % relations[f["id"]] if f["id"] in relations else ""))
+            for column, text in enumerate([str(f["id"]), f["type"], key_parameters(f)]):
                 item = QtGui.QTableWidgetItem(text)
-                item.setToolTip(text)
+                item.setToolTip(self.details[row])
                 widget.setItem(row, column, item)
-        widget.resizeColumnsToContents()
+        # Id and type as wide as they need, the parameters take the rest (elided, in full below).
+        header = widget.horizontalHeader()
+        header.setSectionResizeMode(QtGui.QHeaderView.ResizeToContents)
+        header.setSectionResizeMode(COLUMNS.index("Parameters"), QtGui.QHeaderView.Stretch)
+        self.show_details()
+
+    def show_details(self):
+        rows = self.form.features.selectionModel().selectedRows()
+        self.form.details.setPlainText(self.details[rows[0].row()] if rows else "")
 
     def show_options(self):
         obj = self.obj
@@ -114,6 +136,25 @@ class FeatureLayerPanel:
 
     def row_selected(self):
         layer_object.set_colors(self.obj, self.obj.ViewObject.ColorBy, self.selected_feature())
+        self.show_details()
+
+    def zoom_to_feature(self, feature):
+        """Fit the 3D view to one feature's facets (their bounding box), keeping the view direction."""
+        from pivy import coin
+        gui_document = FreeCADGui.getDocument(self.obj.Document.Name)
+        view = gui_document.ActiveView if gui_document is not None else None
+        if not hasattr(view, "getCameraNode"):  # not a 3D view (e.g. a spreadsheet is active)
+            return
+        if self._mesh is None:
+            self._mesh = mesh_from_freecad(self.obj.Mesh)  # global coordinates, as shown
+        facets = self._mesh.faces[self.labels == feature] if len(self.labels) == self._mesh.n_triangles else []
+        if not len(facets):
+            return
+        corners = self._mesh.vertices[facets.ravel()]
+        low, high = corners.min(axis=0), corners.max(axis=0)
+        width, height = view.getSize()
+        # slack 1.0: the box just fits, as View > Fit selection does
+        view.getCameraNode().viewBoundingBox(coin.SbBox3f(*low, *high), width / max(height, 1), 1.0)
 
     def select_feature(self, feature):
         """Select the row of a feature id (as a click on its patch in the view does)."""
@@ -155,6 +196,7 @@ class FeatureLayerPanel:
             report_error("Recompute feature layer", error)
             return
         self.labels = np.asarray(obj.Labels, dtype=np.int64)
+        self._mesh = None
         self.fill()
 
     # --- task dialog protocol

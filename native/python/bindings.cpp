@@ -2,7 +2,7 @@
 // row-major. Long computations release the GIL (inputs are converted to C++ before, results to
 // Python after); C++ exceptions become Python exceptions. They take an optional Progress that
 // another Python thread reads and may cancel while they run.
-#include "brep_builder.h"
+#include "brep/brep.h"
 #include "bspline_fitting.h"
 #include "curvature.h"
 #include "feature_layer.h"

@@ -348,7 +348,7 @@ std::vector<std::pair<int, int>> adjacent_pairs(const TriangleMesh& mesh, const 
 
 
 // A small ball where fillets meet (thesis 4.3, case 2) fits a cylinder about as well as a sphere on
-// a noisy mesh, and identification takes the simpler cylinder (as_3boxesblend_05's scan: a ball of
+// a noisy mesh, and identification takes the simpler cylinder (a scan of blended boxes: a ball of
 // r 0.1, 48 facets, between three fillets, fitted by a cylinder of r 0.12 across the corner). A
 // cylinder beside two or more cylinders of one radius whose axes are not parallel and pass within
 // the distance tolerance of one point is that ball, where the sphere about the point with their
@@ -2060,7 +2060,7 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
   // circles lie on both, and identification prefers the sphere. A chamfer meets its neighbours at
   // creases, while a sphere zone of a design (a ball between fillets, a rounded corner) is tangent
   // to some: a sphere that meets every neighbour at a crease, and that a cone explains as exactly,
-  // is a cone (occt_screw's point).
+  // is a cone (a screw's point).
   if (exact_mesh) {
     std::vector<char> tangent(layer.features.size(), 0), creased(layer.features.size(), 0);
     for (const FeatureAdjacency& a : layer.adjacency)

@@ -48,6 +48,17 @@ void on_two_threads_as_free(int count, const Work& work) {
   });
 }
 
+// The same, both threads taking no further item once `progress` is cancelled; then throws Cancelled.
+template <class Work>
+void on_two_threads_as_free(int count, const Work& work, const ProgressSpan& progress) {
+  std::atomic<int> next{0};
+  const auto cancelled = [&] { return progress.progress && progress.progress->cancelled(); };
+  on_two_threads([&](size_t) {
+    for (int i = next++; i < count && !cancelled(); i = next++) work(i);
+  });
+  progress.check();
+}
+
 // for_each_polled (progress.h) on two threads: blocks of `block` items in turn.
 template <class Body>
 void for_each_polled_on_two_threads(int count, const ProgressSpan& progress, const Body& body, int block = 1 << 14) {

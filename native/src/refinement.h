@@ -23,7 +23,7 @@ struct RefinementOptions {
   // Splitting stops at this many times the triangles that an even sampling of the surface at the
   // target edge length needs (or the input's count if larger): a fan of slivers that no split can
   // mend multiplies instead (a degenerate input of a few needles reached 1.6 million faces). The
-  // benchmark's CAD tessellations need up to 8.6 times (as_cylinder's fans of slivers on its caps).
+  // benchmark's CAD tessellations need up to 8.6 times (a cylinder's fans of slivers on its caps).
   double max_oversampling = 12.0;
 };
 

@@ -2,6 +2,7 @@
 #include "deviation.h"
 
 #include "../remesh_cgal.h"
+#include "occt_progress.h"
 
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepTools.hxx>
@@ -25,9 +26,14 @@ ShapeMeshDistance shape_mesh_distance(const std::vector<TopoDS_Face>& faces, con
   TopoDS_Compound sampled;
   builder.MakeCompound(sampled);
   for (const TopoDS_Face& face : faces) builder.Add(sampled, face);
-  // Angular deflection 0.5 rad: OpenCASCADE's default; the chordal one decides on curved faces.
-  BRepMesh_IncrementalMesh mesher(sampled, deflection, Standard_False, 0.5, Standard_True);
-  progress.step(0.3);
+  IMeshTools_Parameters parameters;
+  parameters.Deflection = deflection;
+  parameters.Angle = 0.5;  // rad, OpenCASCADE's default: the chordal deflection decides on curved faces
+  parameters.Relative = Standard_False;
+  parameters.InParallel = Standard_True;
+  Handle(OcctProgress) indicator = new OcctProgress(progress.sub(0.0, 0.3));
+  BRepMesh_IncrementalMesh mesher(sampled, parameters, indicator->Start());
+  progress.step(0.3);  // throws Cancelled when the mesher stopped early
 
   // The shape's triangulation (for the mesh's vertices) and each face's samples (for its distance).
   std::vector<Eigen::Vector3d> nodes;

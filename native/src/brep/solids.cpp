@@ -7,7 +7,6 @@
 #include <GProp_GProps.hxx>
 #include <Precision.hxx>
 #include <Message_ProgressRange.hxx>
-#include <ShapeFix_Solid.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
@@ -66,18 +65,26 @@ TopoDS_Shape solids_from_shells(const std::vector<TopoDS_Shell>& shells) {
     double volume = 0.0;
   };
   std::vector<Body> bodies;
+  BRep_Builder builder;
   for (const TopoDS_Shell& shell : shells) {
-    ShapeFix_Solid fix;
-    Body body{TopoDS::Solid(fix.SolidFromShell(shell)), 0.0};
+    // Outwards where its volume comes out positive: the faces of a closed shell agree on their
+    // orientation, so the sign of the volume they enclose tells. (Linear in the faces; classifying
+    // a point against the shell, as ShapeFix_Solid does, took seconds on thousands of facets.)
+    Body body;
+    builder.MakeSolid(body.solid);
+    builder.Add(body.solid, shell);
     GProp_GProps properties;
     BRepGProp::VolumeProperties(body.solid, properties);
+    if (properties.Mass() < 0.0) {
+      builder.MakeSolid(body.solid);
+      builder.Add(body.solid, shell.Reversed());
+    }
     body.volume = std::abs(properties.Mass());
     bodies.push_back(body);
   }
   std::stable_sort(bodies.begin(), bodies.end(), [](const Body& a, const Body& b) { return a.volume > b.volume; });
   if (bodies.size() == 1) return bodies.front().solid;
   // A shell inside a larger body (a point of it classified inside) is that body's void.
-  BRep_Builder builder;
   std::vector<TopoDS_Solid> outer;
   std::vector<std::vector<TopoDS_Shell>> voids;
   for (const Body& body : bodies) {

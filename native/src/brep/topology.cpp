@@ -1,4 +1,4 @@
-#include "brep_topology.h"
+#include "topology.h"
 
 #include <algorithm>
 #include <cmath>

@@ -6,16 +6,16 @@
 // are created once and shared by their two faces (no sewing by tolerance, which merges or misses
 // edges on small features).
 //
-// Topology comes from the mesh (brep_topology.h): each region boundary chain becomes an edge on
+// Topology comes from the mesh (topology.h): each region boundary chain becomes an edge on
 // the exact intersection of the two ideal surfaces (line, circle or ellipse in closed form for the
 // pairs an idealized prismatic part has; OCCT's surface intersection otherwise; a B-spline through
 // the chain projected onto both surfaces where the surfaces touch tangentially and no closed form
 // applies), each corner a vertex at the point closest to all surfaces meeting there.
 #pragma once
 
-#include "mesh.h"
-#include "progress.h"
-#include "surface.h"
+#include "../mesh.h"
+#include "../progress.h"
+#include "../surface.h"
 
 #include <TopoDS_Shape.hxx>
 

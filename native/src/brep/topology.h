@@ -4,11 +4,11 @@
 // boundaries are traced on the mesh as loops of half-edges with the region on the left (the mesh is
 // counter-clockwise seen from outside), cut at corners (vertices where three or more regions meet)
 // into chains, each chain separating two regions and becoming one B-rep edge used by both.
-// Pure C++ on the mesh: the geometry (surfaces, curves) is brep_builder's.
+// Pure C++ on the mesh: the geometry (surfaces, curves) is the builder's (builder.h).
 #pragma once
 
-#include "mesh.h"
-#include "surface.h"
+#include "../mesh.h"
+#include "../surface.h"
 
 #include <vector>
 

@@ -1,6 +1,7 @@
 // Output of the fitted B-rep: BRep text for FreeCAD, STEP files, triangulations.
-#include "brep_builder.h"
-#include "occt_signals.h"
+#include "brep.h"
+#include "occt_progress.h"
+#include "../occt_signals.h"
 
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
@@ -8,8 +9,6 @@
 #include <BRep_Tool.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
-#include <Message_ProgressIndicator.hxx>
-#include <Message_ProgressScope.hxx>
 #include <Message_Messenger.hxx>
 #include <Poly_Triangulation.hxx>
 #include <Quantity_Color.hxx>
@@ -63,19 +62,6 @@ class QuietMessenger {
 
  private:
   Message_SequenceOfPrinters saved_;
-};
-
-// OCCT's progress indicator passing on to ours: the mesher polls UserBreak() between faces.
-class OcctProgress : public Message_ProgressIndicator {
- public:
-  explicit OcctProgress(const ProgressSpan& span) : span_(span) {}
-  Standard_Boolean UserBreak() override { return span_.progress && span_.progress->cancelled(); }
-  void Show(const Message_ProgressScope&, const Standard_Boolean) override {
-    if (span_.progress) span_.progress->report(span_.stage, span_.start + (span_.end - span_.start) * GetPosition());
-  }
-
- private:
-  ProgressSpan span_;
 };
 
 TriangleMesh triangulate_faces(const TopoDS_Shape& shape, double deflection, const ProgressSpan& progress) {
