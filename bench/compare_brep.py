@@ -74,7 +74,13 @@ def run(repo: str, tasks, timeout: float):
         return list(pool.map(convert, tasks))
 
 
-def table(new, old) -> str:
+def changed(r, b) -> bool:
+    """Whether a mesh's result differs between two runs: solid or not, kinds of faces, analytic area."""
+    return (bool(r.get("solid")) != bool(b.get("solid")) or r.get("kinds") != b.get("kinds")
+            or abs(r.get("aaf", 0) - b.get("aaf", 0)) > 1e-3)
+
+
+def table(new, old, only_changed=False) -> str:
     base = {(r["name"], r["variant"]): r for r in old}
     agg = collections.defaultdict(collections.Counter)
     lines = ["| part | variant | before | after | analytic area | regions analytic / bspline / faceted | B-rep s before / after |",
@@ -91,6 +97,8 @@ def table(new, old) -> str:
         a["99"] += bool(r.get("solid")) and r.get("aaf", 0) >= 0.99
         a["90"] += bool(r.get("solid")) and r.get("aaf", 0) >= 0.90
         k = r.get("kinds") or {}
+        if only_changed and not changed(r, b):
+            continue
         lines.append(f"| {r['name']} | {r['variant']} | {state(b)} | {state(r)} | {100 * r.get('aaf', 0):.1f} % | "
                      f"{k.get('analytic', '')} / {k.get('bspline', '')} / {k.get('faceted', '')} | "
                      f"{b.get('brep', 0):.2f} / {r.get('brep', 0):.2f} |")
@@ -113,12 +121,14 @@ def main() -> int:
     parser.add_argument("--variant", action="append", choices=("cad", "scan", "sculpt"))
     parser.add_argument("--timeout", type=float, default=900, help="seconds per mesh")
     parser.add_argument("--table", nargs=2, metavar=("NEW", "OLD"))
+    parser.add_argument("--changed", action="store_true", help="with --table: only the meshes whose result changed")
     args = parser.parse_args()
     if args.one:
         one(*args.one)
         return 0
     if args.table:
-        print(table(json.loads(Path(args.table[0]).read_text()), json.loads(Path(args.table[1]).read_text())))
+        print(table(json.loads(Path(args.table[0]).read_text()), json.loads(Path(args.table[1]).read_text()),
+                    args.changed))
         return 0
     sys.path.insert(0, str(BENCH))
     import datasets

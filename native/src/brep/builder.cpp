@@ -139,7 +139,34 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   BrepResult result;
   progress_.step(0.0);  // a cancelled Progress stops here, before any work
   auto since = Clock::now();
-  // Faces whose corners coincide carry no area and no topology.
+  const std::vector<int> clean_labels = clean_mesh(labels);
+  progress_.step(0.05);
+  const MeshTopology topology(clean_);
+  progress_.step(0.15);
+  const std::vector<int> face_feature = face_features(topology, clean_labels);
+  progress_.step(0.35);
+  topo_ = trace_boundaries(clean_, topology, face_feature);
+  region_faces_.assign(topo_.region_feature.size(), {});
+  for (int f = 0; f < clean_.num_faces(); ++f) region_faces_[topo_.face_region[f]].push_back(f);
+  stage(result, "brep.topology", since);
+  progress_.step(0.45);
+
+  progress_.sub("vertices", 0.0, 1.0).step(0.5);
+  fit_freeform_surfaces(clean_, face_feature, result);
+  make_vertices(topology);
+  make_region_surfaces();
+  compute_curves();
+  measure_fits();
+  stage(result, "brep.edges", since);
+  degrade_in_rounds(result, options);
+  stage(result, "brep.faces", since);
+  report_regions(result);
+  return result;
+}
+
+// The mesh without the triangles whose corners coincide (no area, no topology); returns their
+// labels.
+std::vector<int> BrepBuilder::clean_mesh(const std::vector<int>& labels) {
   TriangleMesh& clean = clean_;
   std::vector<int> clean_labels;
   clean.V = mesh_.V;
@@ -153,13 +180,16 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     clean.F.row(static_cast<Eigen::Index>(i)) = mesh_.F.row(kept[i]);
     clean_labels.push_back(labels[kept[i]]);
   }
-  progress_.step(0.05);
-  const MeshTopology topology(clean);
-  progress_.step(0.15);
+  return clean_labels;
+}
+
+// The feature of every triangle of the clean mesh, features on one surface merged and sampling
+// blends dissolved; a part of the mesh that no feature reaches is one more, freeform, feature: a
+// B-spline fitted to it, or its facets.
+std::vector<int> BrepBuilder::face_features(const MeshTopology& topology, const std::vector<int>& clean_labels) {
+  const TriangleMesh& clean = clean_;
   const std::vector<int> merged = dissolve_sampling_blends(clean, topology, merge_same_surfaces(clean_labels));
   progress_.step(0.25);
-  // A part of the mesh that no feature reaches is one more, freeform, feature: a B-spline fitted to
-  // it, or its facets.
   const int unexplained = static_cast<int>(surfaces_.size());
   const std::vector<int> face_feature = complete_face_features(clean, topology, merged, surfaces_, 0.1, unexplained);
   if (std::count(face_feature.begin(), face_feature.end(), unexplained)) {
@@ -167,17 +197,13 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     freeform.type = SurfaceType::Freeform;
     surfaces_.push_back(freeform);
   }
-  progress_.step(0.35);
-  topo_ = trace_boundaries(clean, topology, face_feature);
-  region_faces_.assign(topo_.region_feature.size(), {});
-  for (int f = 0; f < clean.num_faces(); ++f) region_faces_[topo_.face_region[f]].push_back(f);
-  stage(result, "brep.topology", since);
-  progress_.step(0.45);
+  return face_feature;
+}
 
-  progress_.sub("vertices", 0.0, 1.0).step(0.5);
-  fit_freeform_surfaces(clean, face_feature, result);
-  make_vertices(topology);
-  // One surface per region, oriented against the mesh normals.
+// One surface per region, oriented against the mesh normals, its seam away from its face (or shared
+// with a neighbour that winds round the same axis).
+void BrepBuilder::make_region_surfaces() {
+  const TriangleMesh& clean = clean_;
   const int regions = static_cast<int>(topo_.region_feature.size());
   std::vector<std::vector<Vec3>> region_points(regions);
   region_sense_.assign(regions, 0.0);
@@ -223,14 +249,15 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     region_surfaces_[r] = spline != freeform_.end() ? Handle(Geom_Surface)(spline->second.surface)
                                                     : make_surface(surfaces_[topo_.region_feature[r]], region_points[r], round);
   }
-  compute_curves();
-  measure_fits();
-  stage(result, "brep.edges", since);
-  // Graceful degradation, region by region. A region whose face fails (not made, not valid, or
-  // where the shell does not close) is first bounded by the mesh's border between it and its
-  // neighbours, moved onto their surfaces (its own surface stays); where it fails again, it is made
-  // of its triangles. Each round degrades at least one more region; the last facets them all, which
-  // closes whenever the mesh does.
+}
+
+// Graceful degradation, region by region. A region whose face fails (not made, not valid, or
+// where the shell does not close) is first bounded by the mesh's border between it and its
+// neighbours, moved onto their surfaces (its own surface stays); where it fails again, it is made
+// of its triangles. Each round degrades at least one more region; the last facets them all, which
+// closes whenever the mesh does.
+void BrepBuilder::degrade_in_rounds(BrepResult& result, const BrepOptions& options) {
+  const int regions = static_cast<int>(topo_.region_feature.size());
   constexpr int kRounds = 5;  // attempts before every region is faceted (a time budget)
   faceted_.assign(regions, 0);
   bounded_.assign(regions, 0);
@@ -305,8 +332,12 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
                                                       : facet_reason_[r] + "; then the shell did not close";
         }
   }
-  stage(result, "brep.faces", since);
-  // What became of each region.
+}
+
+// What became of each region, and the features of the result named as the layer's (-1 for the
+// feature added for what none explained).
+void BrepBuilder::report_regions(BrepResult& result) const {
+  const int regions = static_cast<int>(topo_.region_feature.size());
   const Eigen::VectorXd areas = face_areas(clean_);
   double total = 0.0, analytic = 0.0;
   for (int r = 0; r < regions; ++r) {
@@ -331,7 +362,6 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
     layer_feature(edge.a);
     layer_feature(edge.b);
   }
-  return result;
 }
 
 // One attempt with the regions faceted so far: edges, faces, the shell and its checks. Returns

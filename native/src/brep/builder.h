@@ -124,6 +124,12 @@ class BrepBuilder {
     result.timings.emplace_back(name, std::chrono::duration<double>(now - since).count());
     since = now;
   }
+  // The stages of run(), in order.
+  std::vector<int> clean_mesh(const std::vector<int>& labels);
+  std::vector<int> face_features(const MeshTopology& topology, const std::vector<int>& clean_labels);
+  void make_region_surfaces();
+  void degrade_in_rounds(BrepResult& result, const BrepOptions& options);
+  void report_regions(BrepResult& result) const;
   std::vector<int> merge_same_surfaces(const std::vector<int>& labels) const;
   std::optional<RoundFace> round_face(int region) const;
   bool split_at_seam(int chain, const Handle(Geom_Curve)& curve, double u0, double u1, const TopoDS_Vertex& v0,
@@ -150,6 +156,11 @@ class BrepBuilder {
   // The healed, sewn and merged shape; `closed_faults`: closed_shell_faults of the solid returned
   // where merging had to judge its faces already, else empty.
   TopoDS_Shape assemble(BrepResult& result, const BrepOptions& options, std::vector<std::string>& closed_faults);
+  std::vector<char> fit_edge_tolerances(BrepResult& result);
+  std::vector<char> sound_faces() const;
+  TopoDS_Shape facets_only(BrepResult& result, const ProgressSpan& progress);
+  TopoDS_Shape sew(BrepResult& result, const std::vector<char>& stray, const std::vector<char>& sound,
+                   const ProgressSpan& progress);
   TopoDS_Shape with_facets(const TopoDS_Shape& sewn, const BRepBuilderAPI_Sewing& sewing, ShapeBuild_ReShape& healed) const;
   // The region whose surface `face` lies on, -1 none.
   int region_of(const TopoDS_Face& face) const;

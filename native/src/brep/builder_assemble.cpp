@@ -58,10 +58,56 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     result.closed = false;
     return nothing;
   }
-  // An edge's tolerance must cover its pcurves too: a circle on a sphere that is no parallel (a
-  // ball corner's rim) gets an approximated pcurve that strays from the circle by more than the
-  // exact circle's tolerance, which BRepCheck accepts and the boolean operations' check does not.
-  // The checks only read the faces (on two threads, edge by edge: a few B-spline edges of a scan
+  const std::vector<char> stray = fit_edge_tolerances(result);
+  const std::vector<char> sound = sound_faces();
+  const ProgressSpan progress = progress_.sub("sewing", 0.83, 0.9);
+  if (std::all_of(face_facet_.begin(), face_facet_.end(), [](char facet) { return facet != 0; }))
+    return facets_only(result, progress);
+  const bool with_facet = std::any_of(face_facet_.begin(), face_facet_.end(), [](char facet) { return facet != 0; });
+  TopoDS_Shape shape = sew(result, stray, sound, progress);
+  // Closed shells become solids (one per body).
+  std::vector<TopoDS_Shell> shells;
+  int shell_faces = 0, faces = 0;
+  for (TopExp_Explorer e(shape, TopAbs_SHELL); e.More(); e.Next()) {
+    shells.push_back(TopoDS::Shell(e.Current()));
+    for (TopExp_Explorer f(e.Current(), TopAbs_FACE); f.More(); f.Next()) ++shell_faces;
+  }
+  for (TopExp_Explorer f(shape, TopAbs_FACE); f.More(); f.Next()) ++faces;
+  const bool closed = !shells.empty() && shell_faces == faces && !has_free_edges(shape);
+  result.closed = closed;
+  if (closed) shape = solids_from_shells(shells);
+  // (Not with facets: merging thousands of them takes minutes.)
+  if (options.unify && closed && !with_facet) {
+    // Merging is a refinement: where OCCT's merging fails (it faults on some edges) or leaves an
+    // invalid face (a circle cut where a sphere cap's seam met it, whose pcurve then wraps the
+    // wrong way) of a valid solid, the faces stay as they are. Only on a closed solid: on an open
+    // shell of many faces OCCT 7.6's merging ran for minutes (a fragmented CAD torus blend). The
+    // merged shape is checked first: it is usually valid, and then the one check is all.
+    try {
+      OCC_CATCH_SIGNALS
+      ShapeUpgrade_UnifySameDomain unify(shape, Standard_True, Standard_True, Standard_False);
+      unify.SetLinearTolerance(tol_ * 1e-3);
+      unify.Build();
+      // (Merging may also leave faces that BRepCheck passes and no mesh covers: the sides of a
+      // noisy rounded plate, merged with its corner cylinders, came out as planes bounded by their
+      // whole outline.)
+      std::vector<std::string> faults = closed_shell_faults(unify.Shape(), 0.01 * diagonal_, tol_);
+      result.valid = is_valid(unify.Shape(), true) && no_faults(faults);
+      if (result.valid) closed_faults = std::move(faults);
+      if (result.valid || !is_valid(shape, true)) return unify.Shape();
+    } catch (const Standard_Failure&) {
+    }
+  }
+  result.valid = with_facet ? valid(shape, progress.sub(0.8, 1.0)) : is_valid(shape, true);
+  return shape;
+}
+
+// An edge's tolerance raised to cover its pcurves, and tangent crossings beside vertices covered;
+// returns the faces whose boundary strays from their surface (failed, left out).
+std::vector<char> BrepBuilder::fit_edge_tolerances(BrepResult& result) {
+  // A circle on a sphere that is no parallel (a ball corner's rim) gets an approximated pcurve that
+  // strays from the circle by more than the exact circle's tolerance, which BRepCheck accepts and
+  // the boolean operations' check does not. The checks only read the faces (on two threads, edge by edge: a few B-spline edges of a scan
   // that does not close take most of the time); the tolerances are raised in face order.
   const int face_count = static_cast<int>(faces_.size());
   struct PcurveGap {
@@ -115,6 +161,12 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     } catch (const Standard_Failure&) {
     }
   }
+  return stray;
+}
+
+// The faces that need no healing: valid as built (planar facets by construction), and bounded.
+std::vector<char> BrepBuilder::sound_faces() const {
+  const int face_count = static_cast<int>(faces_.size());
   // Healing only where needed: invalid faces, and faces bounded by nothing (a whole sphere or torus
   // gets its natural bounds). Each face is judged as built (on two threads: a few faces of a scan
   // that does not close take most of the time), before healing touches its neighbours' edges.
@@ -130,24 +182,32 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     } catch (const Standard_Failure&) {
     }
   }, progress_);
-  const ProgressSpan progress = progress_.sub("sewing", 0.83, 0.9);
-  if (std::all_of(face_facet_.begin(), face_facet_.end(), [](char facet) { return facet != 0; })) {
-    // Facets only: they share their edges already, and sewing thousands of them is slow.
-    const std::vector<TopoDS_Shell> shells = connected_shells(faces_);
-    result.closed = std::none_of(shells.begin(), shells.end(), [](const TopoDS_Shell& shell) { return has_free_edges(shell); });
-    TopoDS_Shape shape;
-    if (result.closed) {
-      shape = solids_from_shells(shells);
-    } else {
-      BRep_Builder builder;
-      TopoDS_Compound open;
-      builder.MakeCompound(open);
-      for (const TopoDS_Shell& shell : shells) builder.Add(open, shell);
-      shape = open;
-    }
-    result.valid = valid(shape, progress.sub(0.5, 1.0));
-    return shape;
+  return sound;
+}
+
+// Facets only: they share their edges already, and sewing thousands of them is slow.
+TopoDS_Shape BrepBuilder::facets_only(BrepResult& result, const ProgressSpan& progress) {
+  const std::vector<TopoDS_Shell> shells = connected_shells(faces_);
+  result.closed = std::none_of(shells.begin(), shells.end(), [](const TopoDS_Shell& shell) { return has_free_edges(shell); });
+  TopoDS_Shape shape;
+  if (result.closed) {
+    shape = solids_from_shells(shells);
+  } else {
+    BRep_Builder builder;
+    TopoDS_Compound open;
+    builder.MakeCompound(open);
+    for (const TopoDS_Shell& shell : shells) builder.Add(open, shell);
+    shape = open;
   }
+  result.valid = valid(shape, progress.sub(0.5, 1.0));
+  return shape;
+}
+
+// The analytic faces healed where needed and sewn, the facets joined (with_facets); one face sewn
+// to itself (a whole sphere) as a shell.
+TopoDS_Shape BrepBuilder::sew(BrepResult& result, const std::vector<char>& stray, const std::vector<char>& sound,
+                              const ProgressSpan& progress) {
+  const int face_count = static_cast<int>(faces_.size());
   // The analytic faces are sewn; the facets, which share their edges and vertices exactly, are not
   // (sewing thousands of them takes minutes): they take the edges and vertices that healing and
   // sewing put in place of theirs.
@@ -204,40 +264,6 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     shape = shell;
   }
 
-  // Closed shells become solids (one per body).
-  std::vector<TopoDS_Shell> shells;
-  int shell_faces = 0, faces = 0;
-  for (TopExp_Explorer e(shape, TopAbs_SHELL); e.More(); e.Next()) {
-    shells.push_back(TopoDS::Shell(e.Current()));
-    for (TopExp_Explorer f(e.Current(), TopAbs_FACE); f.More(); f.Next()) ++shell_faces;
-  }
-  for (TopExp_Explorer f(shape, TopAbs_FACE); f.More(); f.Next()) ++faces;
-  const bool closed = !shells.empty() && shell_faces == faces && !has_free_edges(shape);
-  result.closed = closed;
-  if (closed) shape = solids_from_shells(shells);
-  // (Not with facets: merging thousands of them takes minutes.)
-  if (options.unify && closed && !with_facet) {
-    // Merging is a refinement: where OCCT's merging fails (it faults on some edges) or leaves an
-    // invalid face (a circle cut where a sphere cap's seam met it, whose pcurve then wraps the
-    // wrong way) of a valid solid, the faces stay as they are. Only on a closed solid: on an open
-    // shell of many faces OCCT 7.6's merging ran for minutes (a fragmented CAD torus blend). The
-    // merged shape is checked first: it is usually valid, and then the one check is all.
-    try {
-      OCC_CATCH_SIGNALS
-      ShapeUpgrade_UnifySameDomain unify(shape, Standard_True, Standard_True, Standard_False);
-      unify.SetLinearTolerance(tol_ * 1e-3);
-      unify.Build();
-      // (Merging may also leave faces that BRepCheck passes and no mesh covers: the sides of a
-      // noisy rounded plate, merged with its corner cylinders, came out as planes bounded by their
-      // whole outline.)
-      std::vector<std::string> faults = closed_shell_faults(unify.Shape(), 0.01 * diagonal_, tol_);
-      result.valid = is_valid(unify.Shape(), true) && no_faults(faults);
-      if (result.valid) closed_faults = std::move(faults);
-      if (result.valid || !is_valid(shape, true)) return unify.Shape();
-    } catch (const Standard_Failure&) {
-    }
-  }
-  result.valid = with_facet ? valid(shape, progress.sub(0.8, 1.0)) : is_valid(shape, true);
   return shape;
 }
 
