@@ -8,7 +8,7 @@ import time
 
 import FreeCADGui
 
-from ..progress import Progress
+from ..progress import Cancelled, Progress
 
 # The dialog appears only for calls longer than this (seconds): shorter ones would flash.
 SHOW_AFTER = 0.5
@@ -52,8 +52,14 @@ def run_with_progress(title, function, *args, **kwargs):
         if worker.is_alive():  # the event loop raised (e.g. KeyboardInterrupt): stop the worker
             progress.cancel()
             worker.join()
+        # Read before close(): closing a QProgressDialog emits canceled (progress.cancel) too.
+        cancelled = progress.cancelled or dialog.wasCanceled()
         dialog.close()
         dialog.deleteLater()
+    if cancelled and not isinstance(outcome.get("error"), Cancelled):
+        # Cancel pressed after the worker's last look at the flag (it finished meanwhile, or it
+        # was in a step that does not poll): the user asked for nothing, so nothing is returned.
+        raise Cancelled("%s cancelled" % title)
     if "error" in outcome:
         raise outcome["error"]
     return outcome["result"]
