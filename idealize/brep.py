@@ -18,7 +18,8 @@ class Solid:
     face_features: the feature of each face. regions: per region of the mesh, a dict with its
     feature, the kind of its face ("analytic", "bspline" or "faceted": its triangles, where its
     surface gave no valid face), the reason when faceted, and its area. analytic_area_fraction: the
-    share of the mesh's area on analytic faces.
+    share of the mesh's area on analytic faces. joined: (feature, the feature it joined) for each
+    feature whose region a neighbour's surface explained as well as its own (no face of its own).
     max_deviation: largest distance from the input mesh vertices to the shape's faces.
     Honest validity (measured by the construction on a closed valid shape, 0 otherwise):
     mesh_to_shape and shape_to_mesh, the two-sided distance between the mesh and the faces;
@@ -40,6 +41,7 @@ class Solid:
         self.max_tolerance = brep.max_tolerance
         self.surface_types = dict(brep.surface_types)
         self.problems = list(brep.problems)
+        self.joined = list(brep.joined)
         self.face_features = list(brep.face_features)
         self.regions = list(brep.regions)
         self.analytic_area_fraction = float(brep.analytic_area_fraction)
@@ -94,6 +96,7 @@ class Solid:
             "faceted": [{"feature": int(r["feature"]), "reason": r["reason"], "area": float(r["area"])}
                         for r in self.regions if r["kind"] == "faceted"],
             "problems": [{"feature": int(f), "message": m} for f, m in self.problems],
+            "joined": [{"feature": int(f), "into": int(into)} for f, into in self.joined],
         }
 
     def __repr__(self):

@@ -71,3 +71,35 @@ def test_an_open_mesh_states_no_deviation():
     brep = native.build_brep(V, F[keep], face[keep], ["plane"] * len(part.Faces), params)
     assert not brep.solid and not brep.closed
     assert brep.mesh_volume == 0.0 and brep.deviation_bound == 0.0
+
+
+@needs_freecad
+def test_a_region_its_neighbour_explains_joins_it():
+    """Two triangles of a bore's tessellation labelled as planes of their own (the one-triangle
+    planes a feature layer leaves along a CAD export's rounded edges): their vertices lie on the
+    cylinder and their middles within its sagitta, so the cylinder explains them as well as their
+    planes do. They join it before any geometry is made, and every face is analytic (before, they
+    became facets). A step or a disc that only touches a neighbour's surface along its border stays
+    (the round trips of test_brep keep them)."""
+    part = box_with_hole()
+    V, F, _ = shapes.tessellate_with_faces(part, 0.05)
+    layer = idealize.idealize(Mesh(V, F))
+    labels = np.asarray(layer.labels, dtype=np.int32).copy()
+    types = [f["type"] for f in layer.features]
+    params = [dict(f["params"]) for f in layer.features]
+    cylinder = types.index("cylinder")
+    triangles = np.flatnonzero(labels == cylinder)
+    oriented = np.asarray(layer.oriented_faces)
+    for t in triangles[[0, len(triangles) // 3]]:
+        a, b, c = V[oriented[t]]
+        normal = np.cross(b - a, c - a)
+        types.append("plane")
+        params.append({"normal": tuple(normal / np.linalg.norm(normal)), "point": tuple((a + b + c) / 3)})
+        labels[t] = len(types) - 1
+    brep = native.build_brep(V, oriented, labels, types, params, layer.distance_tolerance)
+    assert brep.solid and brep.surface_types == {"cylinder": 1, "plane": 6}
+    assert all(r["kind"] == "analytic" for r in brep.regions)
+    slivers = set(range(len(layer.features), len(types)))
+    assert not slivers & {r["feature"] for r in brep.regions}
+    assert set(brep.joined) == {(feature, cylinder) for feature in slivers}
+    assert brep.volume == pytest.approx(part.Volume, rel=1e-3)

@@ -364,6 +364,11 @@ PYBIND11_MODULE(_native, m) {
         }
         return edges;
       })
+      .def_property_readonly("joined", [](const BrepResult& r) {
+        py::list joined;
+        for (const auto& [feature, into] : r.joined) joined.append(py::make_tuple(feature, into));
+        return joined;
+      })
       .def_property_readonly("problems", [](const BrepResult& r) {
         py::list problems;
         for (const BrepProblem& p : r.problems) problems.append(py::make_tuple(p.feature, p.message));

@@ -10,6 +10,10 @@
 
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
+#include <BRep_Builder.hxx>
+#include <TopExp.hxx>
+#include <TopoDS_Shell.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
 #include <BRepLib_CheckCurveOnSurface.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
@@ -211,6 +215,30 @@ void test_pcurves_and_checks() {
   CHECK(faults.size() == 6 && no_faults(faults));
 }
 
+void test_faces_at_fault() {
+  // Each face of a box passes; a fin on one of its edges makes three faces meet there, and those
+  // three are to blame (facets included: the fin is taken for one).
+  const TopoDS_Shape box = BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape();
+  CHECK(faces_at_fault(box, [](const TopoDS_Face&) { return false; }).empty());
+  TopExp_Explorer edges(box, TopAbs_EDGE);
+  const TopoDS_Edge shared = TopoDS::Edge(edges.Current());
+  TopoDS_Vertex a, b;
+  TopExp::Vertices(shared, a, b);
+  const gp_Pnt pa = BRep_Tool::Pnt(a), pb = BRep_Tool::Pnt(b);
+  const gp_Pnt tip(0.5 * (pa.X() + pb.X()) - 1.0, 0.5 * (pa.Y() + pb.Y()) - 1.0, 0.5 * (pa.Z() + pb.Z()));
+  const TopoDS_Vertex top = BRepBuilderAPI_MakeVertex(tip);
+  const TopoDS_Wire wire = BRepBuilderAPI_MakeWire(shared, BRepBuilderAPI_MakeEdge(b, top), BRepBuilderAPI_MakeEdge(top, a));
+  const TopoDS_Face fin = BRepBuilderAPI_MakeFace(wire, Standard_True);
+  BRep_Builder builder;
+  TopoDS_Shell shell;
+  builder.MakeShell(shell);
+  for (TopExp_Explorer f(box, TopAbs_FACE); f.More(); f.Next()) builder.Add(shell, f.Current());
+  builder.Add(shell, fin);
+  const std::vector<FaceFault> faults = faces_at_fault(shell, [&](const TopoDS_Face& face) { return face.IsSame(fin); });
+  CHECK(faults.size() == 3);
+  for (const FaceFault& fault : faults) CHECK(fault.reason.find("more than two faces") != std::string::npos);
+}
+
 void test_two_sided_distance() {
   // A unit cube's mesh against the box: 0 both ways; against a box 0.1 lower: its top, 0.1 apart
   // (the mesh's top corners off the box, the box's top face off the mesh).
@@ -242,6 +270,7 @@ int main() {
   test_corner_solves();
   test_pcurves_and_checks();
   test_two_sided_distance();
+  test_faces_at_fault();
   if (failures) std::fprintf(stderr, "%d check(s) failed\n", failures);
   else std::printf("brep geometry: all checks passed\n");
   return failures == 0 ? 0 : 1;

@@ -73,6 +73,9 @@ struct BrepResult {
   std::vector<int> face_features;            // per face of `shape` (TopExp order): its feature, -1 unknown
   std::vector<BrepEdge> edges;
   std::vector<BrepRegionFace> regions;       // per region of the labelled mesh
+  // Features whose regions a neighbour's surface explained as well as their own, before any
+  // geometry was made: (feature, the feature it joined); none of their own faces.
+  std::vector<std::pair<int, int>> joined;
   double analytic_area_fraction = 0.0;       // of the mesh's area, on analytic faces
   // Honest validity, measured on a closed valid shape (0 otherwise): the largest distance of a
   // mesh vertex from the faces, and of a point of the faces from the mesh; the largest a region

@@ -88,6 +88,88 @@ std::vector<int> BrepBuilder::dissolve_sampling_blends(const TriangleMesh& mesh,
   return labels;
 }
 
+// Topology cleaning before any geometry (thesis 4.3.3): a region that a neighbouring region's
+// analytic surface explains as well as its own cannot be told from that neighbour, and joins it
+// (the one whose surface passes closest). Explained: its vertices lie on the neighbour's surface
+// within the mesh's noise (on an exact tessellation, within what the layer calls exact), and the
+// middles of its triangles within the tolerance or the neighbour's own sagitta. A one-triangle
+// plane on a cylinder's facets, or a flat narrower than the tolerance between two tangent
+// cylinders, joins; a step 0.03 high beside a plane, whose vertices lie 0.03 off it, stays, and
+// so does a disc whose vertices all lie on its rim (where the blend beside it passes). Such a
+// region's face could not be made anyway: its borders' corners are put at one point, and both
+// borders become the same edge. Smallest regions first; a region that took another in is not
+// given away itself. Returns the features with the joined regions' triangles relabelled (and
+// lists the layer's features that joined in result.joined).
+std::vector<int> BrepBuilder::join_explained_regions(std::vector<int> face_feature, BrepResult& result) const {
+  const int regions = static_cast<int>(topo_.region_feature.size());
+  const auto analytic = [&](int r) { return surfaces_[topo_.region_feature[r]].type != SurfaceType::Freeform; };
+  const auto distance = [&](int r, const Vec3& p) { return std::abs(signed_distance(surfaces_[topo_.region_feature[r]], p)); };
+  std::vector<std::vector<int>> vertices(regions), neighbours(regions);
+  std::vector<double> sagitta(regions, 0.0), residuals;
+  for (int r = 0; r < regions; ++r) {
+    for (int f : region_faces_[r])
+      for (int k = 0; k < 3; ++k) vertices[r].push_back(clean_.F(f, k));
+    std::sort(vertices[r].begin(), vertices[r].end());
+    vertices[r].erase(std::unique(vertices[r].begin(), vertices[r].end()), vertices[r].end());
+    if (!analytic(r)) continue;
+    for (int v : vertices[r]) residuals.push_back(distance(r, clean_.V.row(v).transpose()));
+    for (int f : region_faces_[r]) {  // how far its triangles' middles lie off it beyond their corners
+      double corners = 0.0;
+      for (int k = 0; k < 3; ++k) corners += distance(r, clean_.V.row(clean_.F(f, k)).transpose()) / 3.0;
+      sagitta[r] = std::max(sagitta[r], distance(r, face_centroid(clean_, f)) - corners);
+    }
+  }
+  if (residuals.empty()) return face_feature;
+  // The noise as measure_fits estimates it (the median residual is 0.6745 sigma; the largest of n
+  // is about sigma sqrt(2 ln n)), and what the layer calls an exact fit.
+  std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
+  const double sigma = 1.4826 * residuals[residuals.size() / 2];
+  const double exact = std::max(kExactFraction * tol_, 2.0 * coordinate_floor(clean_));
+  for (const BoundaryChain& chain : topo_.chains) {
+    if (chain.right < 0) continue;
+    neighbours[chain.left].push_back(chain.right);
+    neighbours[chain.right].push_back(chain.left);
+  }
+  std::vector<int> order(regions);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return region_faces_[a].size() < region_faces_[b].size(); });
+  std::vector<int> joined(regions, -1);
+  std::vector<char> took(regions, 0);
+  for (int r : order) {
+    progress_.check();
+    if (took[r]) continue;
+    const double n = static_cast<double>(vertices[r].size());
+    const double on = std::max(exact, n > 1 ? sigma * std::sqrt(2.0 * std::log(n)) : 0.0);
+    std::sort(neighbours[r].begin(), neighbours[r].end());
+    neighbours[r].erase(std::unique(neighbours[r].begin(), neighbours[r].end()), neighbours[r].end());
+    int best = -1;
+    double closest = std::numeric_limits<double>::infinity();
+    for (int m : neighbours[r]) {
+      if (joined[m] >= 0 || topo_.region_feature[m] == topo_.region_feature[r] || !analytic(m)) continue;
+      double farthest = 0.0;
+      bool explained = true;
+      for (int v : vertices[r]) {
+        farthest = std::max(farthest, distance(m, clean_.V.row(v).transpose()));
+        if (!(explained = farthest <= on)) break;
+      }
+      const double middle = std::max(tol_, sagitta[m]);
+      for (size_t i = 0; explained && i < region_faces_[r].size(); ++i)
+        explained = distance(m, face_centroid(clean_, region_faces_[r][i])) <= middle;
+      if (explained && farthest < closest) {
+        closest = farthest;
+        best = m;
+      }
+    }
+    if (best < 0) continue;
+    joined[r] = best;
+    took[best] = 1;
+    const int from = topo_.region_feature[r], to = topo_.region_feature[best];
+    for (int f : region_faces_[r]) face_feature[f] = to;
+    if (from < features_ && to < features_) result.joined.emplace_back(from, to);
+  }
+  return face_feature;
+}
+
 // The B-spline of each freeform feature, fitted to the vertices of its faces (weighted by a third of
 // each face's area) with the face normals checking that it is a height field.
 void BrepBuilder::fit_freeform_surfaces(const TriangleMesh& mesh, const std::vector<int>& face_feature,
@@ -143,11 +225,17 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   progress_.step(0.05);
   const MeshTopology topology(clean_);
   progress_.step(0.15);
-  const std::vector<int> face_feature = face_features(topology, clean_labels);
+  std::vector<int> face_feature = face_features(topology, clean_labels);
   progress_.step(0.35);
-  topo_ = trace_boundaries(clean_, topology, face_feature);
-  region_faces_.assign(topo_.region_feature.size(), {});
-  for (int f = 0; f < clean_.num_faces(); ++f) region_faces_[topo_.face_region[f]].push_back(f);
+  const auto trace = [&](const std::vector<int>& features) {
+    topo_ = trace_boundaries(clean_, topology, features);
+    region_faces_.assign(topo_.region_feature.size(), {});
+    for (int f = 0; f < clean_.num_faces(); ++f) region_faces_[topo_.face_region[f]].push_back(f);
+  };
+  trace(face_feature);
+  const std::vector<int> joined = join_explained_regions(face_feature, result);
+  if (joined != face_feature) trace(joined);
+  face_feature = joined;
   stage(result, "brep.topology", since);
   progress_.step(0.45);
 
@@ -258,7 +346,7 @@ void BrepBuilder::make_region_surfaces() {
 // closes whenever the mesh does.
 void BrepBuilder::degrade_in_rounds(BrepResult& result, const BrepOptions& options) {
   const int regions = static_cast<int>(topo_.region_feature.size());
-  constexpr int kRounds = 5;  // attempts before every region is faceted (a time budget)
+  constexpr int kRounds = 4;  // the rounds' time budget (below): 8 rounds at most, then every region faceted
   faceted_.assign(regions, 0);
   bounded_.assign(regions, 0);
   facet_reason_.assign(regions, "");
@@ -288,9 +376,11 @@ void BrepBuilder::degrade_in_rounds(BrepResult& result, const BrepOptions& optio
     polyline_.assign(topo_.chains.size(), 0);
     for (size_t c = 0; c < topo_.chains.size(); ++c) {
       const BoundaryChain& chain = topo_.chains[c];
-      polyline_[c] = faceted_[chain.left] || bounded_[chain.left] ||
+      // (A chain whose corners are one vertex is no edge, also beside a facet: place_polylines
+      // gives its vertices that one vertex.)
+      polyline_[c] = !collapsed_[c] && (faceted_[chain.left] || bounded_[chain.left] ||
                      (chain.right >= 0 && (faceted_[chain.right] || bounded_[chain.right])) ||
-                     (!collapsed_[c] && curves_[c].curve.IsNull());
+                     curves_[c].curve.IsNull());
     }
     bool done = false;
     try {
@@ -309,14 +399,24 @@ void BrepBuilder::degrade_in_rounds(BrepResult& result, const BrepOptions& optio
     }
     if (done || all) break;
     // An open mesh does not close however its faces are made: only faces that fail degrade.
-    const bool open_mesh = std::any_of(topo_.chains.begin(), topo_.chains.end(),
-                                       [](const BoundaryChain& chain) { return chain.right < 0; });
-    if (open_mesh && failed_.empty()) break;
+    if (open_mesh() && failed_.empty()) break;
     bool more = false;
+    // A face bounded by the mesh's border is worth a round only while such faces hold in this
+    // part: once every one tried has failed, a region that fails is faceted at once.
+    int bounded_tried = 0, bounded_failed = 0;
+    for (int r = 0; r < regions; ++r)
+      if (bounded_[r]) {
+        ++bounded_tried;
+        bounded_failed += faceted_[r] || failed_.count(r);
+      }
+    const bool bound_first = bounded_tried == 0 || bounded_failed < bounded_tried;
+    // A failure of the first kRounds - 1 rounds is bounded first, a later one faceted at once; a
+    // failure of round 2 kRounds - 1 facets every region left (which closes whenever the mesh does).
+    const bool last = round + 1 >= kRounds;
     for (const auto& [r, why] : failed_) {
       if (faceted_[r]) continue;
       more = true;
-      if (!bounded_[r] && !region_surfaces_[r].IsNull()) {
+      if (!bounded_[r] && !region_surfaces_[r].IsNull() && bound_first && !last) {
         bounded_[r] = 1;
         facet_reason_[r] = why;
         continue;
@@ -324,7 +424,7 @@ void BrepBuilder::degrade_in_rounds(BrepResult& result, const BrepOptions& optio
       faceted_[r] = 1;
       facet_reason_[r] = facet_reason_[r].empty() ? why : facet_reason_[r] + "; bounded by the mesh's border: " + why;
     }
-    if (!more || round + 1 >= kRounds)
+    if (!more || round + 1 >= 2 * kRounds)
       for (int r = 0; r < regions; ++r)
         if (!faceted_[r]) {
           faceted_[r] = 1;
@@ -442,6 +542,19 @@ bool BrepBuilder::build_round(BrepResult& result, const BrepOptions& options) {
           result.problems.push_back({-1, std::string("a ") + occt_surface_name(sewn_faces[i]) + " face: " + message.substr(4)});
       }
     }
+    if (!dropped && !result.valid) {
+      // Each face passes alone and the whole does not: the faces where they meet are to blame.
+      try {
+        OCC_CATCH_SIGNALS
+        for (const FaceFault& fault : faces_at_fault(shape, [&](const TopoDS_Face& face) { return is_facet(face); })) {
+          const int region = region_of(fault.face);
+          fail(region, fault.reason);
+          result.problems.push_back({region >= 0 ? topo_.region_feature[region] : -1, fault.reason});
+        }
+      } catch (const Standard_Failure& failure) {
+        result.problems.push_back({-1, occt_message(failure, "the solid's check failed")});
+      }
+    }
     if (dropped || !result.valid) {  // the sewn shell when it is valid and every face is kept
       shape = kept_faces;
       result.valid = valid(shape, checking.sub(0.6, 0.9));  // what is returned: the valid faces
@@ -451,9 +564,7 @@ bool BrepBuilder::build_round(BrepResult& result, const BrepOptions& options) {
   if (!result.closed) {
     result.problems.push_back({-1, "the faces do not close into a solid (free edges remain)"});
   }
-  const bool open_mesh = std::any_of(topo_.chains.begin(), topo_.chains.end(),
-                                     [](const BoundaryChain& chain) { return chain.right < 0; });
-  if (!result.closed && failed_.empty() && !open_mesh) {
+  if (!result.closed && failed_.empty() && !open_mesh()) {
     // No face failed on its own: the faces along the free edges.
     TopTools_IndexedDataMapOfShapeListOfShape faces_of_edge;
     TopExp::MapShapesAndUniqueAncestors(shape, TopAbs_EDGE, TopAbs_FACE, faces_of_edge);

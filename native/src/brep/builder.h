@@ -136,6 +136,7 @@ class BrepBuilder {
                      const TopoDS_Vertex& v1, double tolerance);
   std::vector<int> dissolve_sampling_blends(const TriangleMesh& mesh, const MeshTopology& topology,
                                             std::vector<int> labels) const;
+  std::vector<int> join_explained_regions(std::vector<int> face_feature, BrepResult& result) const;
   void fit_freeform_surfaces(const TriangleMesh& mesh, const std::vector<int>& face_feature, BrepResult& result);
   LocalSurface local_surface(int feature) const;
   void make_vertices(const MeshTopology& topology);
@@ -158,6 +159,7 @@ class BrepBuilder {
   TopoDS_Shape assemble(BrepResult& result, const BrepOptions& options, std::vector<std::string>& closed_faults);
   std::vector<char> fit_edge_tolerances(BrepResult& result);
   std::vector<char> sound_faces() const;
+  void cover_sewn_pcurve_gaps(const TopoDS_Shape& shape) const;
   TopoDS_Shape facets_only(BrepResult& result, const ProgressSpan& progress);
   TopoDS_Shape sew(BrepResult& result, const std::vector<char>& stray, const std::vector<char>& sound,
                    const ProgressSpan& progress);
@@ -203,6 +205,10 @@ class BrepBuilder {
   bool valid(const TopoDS_Shape& shape, const ProgressSpan& progress) const;
   std::vector<Handle(Geom_Surface)> facet_planes_;         // (keeps those keys alive)
   std::map<int, std::string> failed_;       // regions whose face failed this round -> why
+  // Whether the mesh has a border (a chain with a region on one side only).
+  bool open_mesh() const {
+    return std::any_of(topo_.chains.begin(), topo_.chains.end(), [](const BoundaryChain& chain) { return chain.right < 0; });
+  }
   void fail(int region, const std::string& why) {
     if (region >= 0) failed_.try_emplace(region, why);
   }

@@ -65,6 +65,7 @@ TopoDS_Shape BrepBuilder::assemble(BrepResult& result, const BrepOptions& option
     return facets_only(result, progress);
   const bool with_facet = std::any_of(face_facet_.begin(), face_facet_.end(), [](char facet) { return facet != 0; });
   TopoDS_Shape shape = sew(result, stray, sound, progress);
+  cover_sewn_pcurve_gaps(shape);
   // Closed shells become solids (one per body).
   std::vector<TopoDS_Shell> shells;
   int shell_faces = 0, faces = 0;
@@ -162,6 +163,45 @@ std::vector<char> BrepBuilder::fit_edge_tolerances(BrepResult& result) {
     }
   }
   return stray;
+}
+
+// Sewing makes the edges that two faces share anew, with pcurves of its own and the tolerance it
+// measures by sampling them; between samples a fitted edge's curves may part by a little more,
+// which the boolean operations' check (which searches for the largest gap) rejects. Each edge of
+// an analytic face gets the tolerance that covers the largest gap found, up to the stray-edge
+// bound (beyond it, the edge does not follow the face, and the face is to fail).
+void BrepBuilder::cover_sewn_pcurve_gaps(const TopoDS_Shape& shape) const {
+  struct Use {
+    TopoDS_Edge edge;
+    TopoDS_Face face;
+    double gap = 0.0;
+  };
+  std::vector<Use> uses;
+  TopTools_IndexedMapOfShape seen;
+  for (TopExp_Explorer f(shape, TopAbs_FACE); f.More(); f.Next()) {
+    const TopoDS_Face& face = TopoDS::Face(f.Current());
+    if (is_facet(face)) continue;  // (a facet's edges lie in its plane: their pcurves are exact)
+    for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) uses.push_back({TopoDS::Edge(e.Current()), face});
+  }
+  on_two_threads_as_free(static_cast<int>(uses.size()), [&](int k) {
+    Use& use = uses[k];
+    if (BRep_Tool::Degenerated(use.edge)) return;
+    try {
+      OCC_CATCH_SIGNALS
+      BRepLib_CheckCurveOnSurface check(use.edge, use.face);
+      check.Perform();
+      if (check.IsDone()) use.gap = check.MaxDistance();
+    } catch (const Standard_Failure&) {
+    }
+  }, progress_);
+  BRep_Builder builder;
+  for (const Use& use : uses) {
+    if (!(use.gap > BRep_Tool::Tolerance(use.edge)) || use.gap >= kStrayEdge * tol_) continue;
+    const double tolerance = 1.01 * use.gap;
+    builder.UpdateEdge(use.edge, tolerance);
+    for (TopExp_Explorer v(use.edge, TopAbs_VERTEX); v.More(); v.Next())
+      builder.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
+  }
 }
 
 // The faces that need no healing: valid as built (planar facets by construction), and bounded.

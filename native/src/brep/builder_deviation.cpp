@@ -61,9 +61,7 @@ void BrepBuilder::measure_fits() {
       if (projection.NbPoints() > 0) chain_gap_[c] = std::max(chain_gap_[c], projection.LowerDistance());
     }
   }, progress_);
-  const bool open_mesh = std::any_of(topo_.chains.begin(), topo_.chains.end(),
-                                     [](const BoundaryChain& chain) { return chain.right < 0; });
-  mesh_volume_ = open_mesh ? 0.0 : std::abs(enclosed_volume(clean_));
+  mesh_volume_ = open_mesh() ? 0.0 : std::abs(enclosed_volume(clean_));
 }
 
 // Per region, the distance its face and its mesh may lie apart: the larger of its fit and of the

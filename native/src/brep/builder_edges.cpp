@@ -219,6 +219,14 @@ void BrepBuilder::place_polylines() {
       for (int k = 0; k < 3; ++k) touches_analytic[clean_.F(f, k)] = 1;
   for (const auto& [v, vertex] : vertices_)
     if (touches_analytic[v]) facets_->share(v, vertex);
+  // A chain whose corners the surfaces put at one point is that point for the facets beside it
+  // too: its triangles there have no area, and its border no loop (which would cross itself).
+  for (size_t c = 0; c < topo_.chains.size(); ++c) {
+    const BoundaryChain& chain = topo_.chains[c];
+    if (!collapsed_[c] || !(touches_analytic[chain.vertices.front()] || touches_analytic[chain.vertices.back()])) continue;
+    if (!faceted_[chain.left] && (chain.right < 0 || !faceted_[chain.right])) continue;
+    for (int v : chain.vertices) facets_->share(v, vertices_.at(chain.vertices.front()));
+  }
   for (size_t c = 0; c < topo_.chains.size(); ++c) {
     progress_.check();
     if (!polyline_[c]) continue;

@@ -258,7 +258,8 @@ int BrepBuilder::region_of(const TopoDS_Face& face) const {
                                         surface->Value(u0 + 0.75 * (u1 - u0), v0 + 0.5 * (v1 - v0)),
                                         surface->Value(u0 + 0.5 * (u1 - u0), v0 + 0.75 * (v1 - v0))};
   for (size_t r = 0; r < region_surfaces_.size(); ++r) {
-    if (region_surfaces_[r].IsNull() || region_surfaces_[r]->DynamicType() != surface->DynamicType()) continue;
+    // (A faceted region has no face on its surface: a coplanar region's face is not its.)
+    if (region_surfaces_[r].IsNull() || faceted_[r] || region_surfaces_[r]->DynamicType() != surface->DynamicType()) continue;
     const bool on = std::all_of(points.begin(), points.end(), [&](const gp_Pnt& p) {
       GeomAPI_ProjectPointOnSurf projection(p, region_surfaces_[r]);
       return projection.NbPoints() > 0 && projection.LowerDistance() <= tol_;

@@ -15,6 +15,8 @@
 #include <TopoDS_Shape.hxx>
 
 #include <functional>
+#include <string>
+#include <vector>
 
 namespace idealize {
 
@@ -22,5 +24,15 @@ namespace idealize {
 // `progress` between the checks.
 bool is_valid_with_facets(const TopoDS_Shape& shape, const std::function<bool(const TopoDS_Face&)>& facet,
                           const ProgressSpan& progress = {});
+
+// The faces to blame when a shape is invalid though each face alone passes its checks: those that
+// fail among their neighbours (an edge they share, whose tolerance or pcurves do not suit both),
+// and those along an edge that more than two face sides use (the shell is not a manifold there:
+// a border that collapsed onto another). Facets are checked for the second only.
+struct FaceFault {
+  TopoDS_Face face;
+  std::string reason;
+};
+std::vector<FaceFault> faces_at_fault(const TopoDS_Shape& shape, const std::function<bool(const TopoDS_Face&)>& facet);
 
 }  // namespace idealize
