@@ -48,6 +48,8 @@ def one(repo: str, kind: str, name: str, variant: str) -> None:
     if hasattr(solid, "regions"):
         row["aaf"] = solid.analytic_area_fraction
         row["kinds"] = {k: sum(r["kind"] == k for r in solid.regions) for k in ("analytic", "bspline", "faceted")}
+    if hasattr(solid, "euler"):
+        row["euler"] = solid.euler
     if hasattr(solid, "deviation_bound"):  # honest validity, relative to the mesh's diagonal
         import numpy as np
         diagonal = float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))

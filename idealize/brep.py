@@ -20,6 +20,8 @@ class Solid:
     surface gave no valid face), the reason when faceted, and its area. analytic_area_fraction: the
     share of the mesh's area on analytic faces. joined: (feature, the feature it joined) for each
     feature whose region a neighbour's surface explained as well as its own (no face of its own).
+    euler: {"solid", "mesh"}, the Euler characteristic V - E + F of the solid's faces and of the
+    mesh (2 - 2 genus per body; 0 both without a solid): where they differ, a problem says so.
     max_deviation: largest distance from the input mesh vertices to the shape's faces.
     Honest validity (measured by the construction on a closed valid shape, 0 otherwise):
     mesh_to_shape and shape_to_mesh, the two-sided distance between the mesh and the faces;
@@ -42,6 +44,7 @@ class Solid:
         self.surface_types = dict(brep.surface_types)
         self.problems = list(brep.problems)
         self.joined = list(brep.joined)
+        self.euler = {"solid": int(brep.euler_shape), "mesh": int(brep.euler_mesh)}
         self.face_features = list(brep.face_features)
         self.regions = list(brep.regions)
         self.analytic_area_fraction = float(brep.analytic_area_fraction)
@@ -97,6 +100,7 @@ class Solid:
                         for r in self.regions if r["kind"] == "faceted"],
             "problems": [{"feature": int(f), "message": m} for f, m in self.problems],
             "joined": [{"feature": int(f), "into": int(into)} for f, into in self.joined],
+            "euler": dict(self.euler),
         }
 
     def __repr__(self):

@@ -86,6 +86,13 @@ def test_caps_about_an_apex_or_a_pole(make, export):
     assert solid.volume == pytest.approx(part.Volume, rel=1e-6)
 
 
+def euler_characteristic(part):
+    """V - E + F of a FreeCAD shape's faces (a face of w wires counts 2 - w; degenerate edges none)."""
+    edges = [e for e in part.Edges if not e.Degenerated]
+    vertices = {v.hashCode() for e in edges for v in e.Vertexes}
+    return len(vertices) - len(edges) + sum(2 - len(f.Wires) for f in part.Faces)
+
+
 @needs_freecad
 @pytest.mark.parametrize("make", [box, box_with_hole, shapes.bracket_solid, countersink, spherical_dimple,
                                   torus_blend, bevelled_bore])
@@ -96,6 +103,7 @@ def test_round_trip_of_analytic_parts(make, tmp_path):
     assert solid.problems == []
     assert solid.surface_types == surface_types(part)
     assert solid.faces == len(part.removeSplitter().Faces)
+    assert solid.euler["solid"] == solid.euler["mesh"] == euler_characteristic(part)
     assert solid.volume == pytest.approx(part.Volume, rel=1e-4)
     # Every input vertex lies on the solid (CAD tessellation: up to the chordal deviation).
     assert solid.max_deviation < 0.06

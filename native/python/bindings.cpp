@@ -345,6 +345,8 @@ PYBIND11_MODULE(_native, m) {
       .def_readonly("shape_to_mesh", &BrepResult::shape_to_mesh)
       .def_readonly("deviation_bound", &BrepResult::deviation_bound)
       .def_readonly("mesh_volume", &BrepResult::mesh_volume)
+      .def_readonly("euler_shape", &BrepResult::euler_shape)
+      .def_readonly("euler_mesh", &BrepResult::euler_mesh)
       .def_readonly("timings", &BrepResult::timings)
       .def_property_readonly("regions", [](const BrepResult& r) {
         py::list regions;

@@ -16,7 +16,10 @@
 #include <TopoDS_Shell.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
 #include <BRepLib_CheckCurveOnSurface.hxx>
+#include <BRepAlgoAPI_Cut.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRep_Tool.hxx>
 #include <GeomAdaptor_Curve.hxx>
 #include <Geom_CylindricalSurface.hxx>
@@ -239,6 +242,17 @@ void test_faces_at_fault() {
   for (const FaceFault& fault : faults) CHECK(fault.reason.find("more than two faces") != std::string::npos);
 }
 
+void test_euler_characteristic() {
+  // 2 - 2 genus: a box, a cylinder (seam, two discs) and a sphere (seam, two poles) have 2; a box
+  // with a bore through it (a face of two wires at each end) has 0.
+  CHECK(euler_characteristic(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape()) == 2);
+  CHECK(euler_characteristic(BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape()) == 2);
+  CHECK(euler_characteristic(BRepPrimAPI_MakeSphere(1.0).Shape()) == 2);
+  const TopoDS_Shape block = BRepPrimAPI_MakeBox(4.0, 4.0, 2.0).Shape();
+  const TopoDS_Shape bore = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(2.0, 2.0, -1.0), gp::DZ()), 1.0, 4.0).Shape();
+  CHECK(euler_characteristic(BRepAlgoAPI_Cut(block, bore).Shape()) == 0);
+}
+
 void test_two_sided_distance() {
   // A unit cube's mesh against the box: 0 both ways; against a box 0.1 lower: its top, 0.1 apart
   // (the mesh's top corners off the box, the box's top face off the mesh).
@@ -271,6 +285,7 @@ int main() {
   test_pcurves_and_checks();
   test_two_sided_distance();
   test_faces_at_fault();
+  test_euler_characteristic();
   if (failures) std::fprintf(stderr, "%d check(s) failed\n", failures);
   else std::printf("brep geometry: all checks passed\n");
   return failures == 0 ? 0 : 1;

@@ -83,6 +83,10 @@ struct BrepResult {
   // the mesh encloses. A solid stays within its regions' allowances and its volume within what
   // they account for, or it is not a solid.
   double mesh_to_shape = 0.0, shape_to_mesh = 0.0, deviation_bound = 0.0, mesh_volume = 0.0;
+  // The Euler characteristic V - E + F of the solid's faces and of the mesh (0 both when there is
+  // no solid): equal when the solid has the mesh's handles and bodies (2 - 2 genus
+  // per body). Where they differ, a problem says so.
+  int euler_shape = 0, euler_mesh = 0;
   std::vector<std::pair<std::string, double>> timings;
 };
 

@@ -247,6 +247,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   measure_fits();
   stage(result, "brep.edges", since);
   degrade_in_rounds(result, options);
+  check_euler_characteristic(result);
   stage(result, "brep.faces", since);
   report_regions(result);
   return result;
@@ -432,6 +433,29 @@ void BrepBuilder::degrade_in_rounds(BrepResult& result, const BrepOptions& optio
                                                       : facet_reason_[r] + "; then the shell did not close";
         }
   }
+}
+
+// The closed shape against the mesh: as many bodies and handles (thesis 4.3.3: the topology is
+// the mesh's). Collapsed chains and joined regions leave it unchanged; a loop lost with all its
+// chains collapsed (a hole narrower than the tolerance) does not.
+void BrepBuilder::check_euler_characteristic(BrepResult& result) const {
+  if (!result.solid || result.shape.IsNull()) return;
+  std::vector<std::int64_t> edges;
+  std::vector<char> used(clean_.num_vertices(), 0);
+  for (int f = 0; f < clean_.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t a = clean_.F(f, k), b = clean_.F(f, (k + 1) % 3);
+      edges.push_back(std::min(a, b) * clean_.num_vertices() + std::max(a, b));
+      used[a] = 1;
+    }
+  std::sort(edges.begin(), edges.end());
+  const auto unique_edges = std::unique(edges.begin(), edges.end()) - edges.begin();
+  result.euler_mesh = static_cast<int>(std::count(used.begin(), used.end(), 1) - unique_edges + clean_.num_faces());
+  result.euler_shape = euler_characteristic(result.shape);
+  if (result.euler_shape != result.euler_mesh)
+    result.problems.push_back({-1, "the solid's Euler characteristic " + std::to_string(result.euler_shape) +
+                                       " differs from the mesh's " + std::to_string(result.euler_mesh) +
+                                       " (a handle or a body appeared or vanished)"});
 }
 
 // What became of each region, and the features of the result named as the layer's (-1 for the

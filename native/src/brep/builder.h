@@ -130,6 +130,7 @@ class BrepBuilder {
   void make_region_surfaces();
   void degrade_in_rounds(BrepResult& result, const BrepOptions& options);
   void report_regions(BrepResult& result) const;
+  void check_euler_characteristic(BrepResult& result) const;
   std::vector<int> merge_same_surfaces(const std::vector<int>& labels) const;
   std::optional<RoundFace> round_face(int region) const;
   bool split_at_seam(int chain, const Handle(Geom_Curve)& curve, double u0, double u1, const TopoDS_Vertex& v0,

@@ -22,6 +22,7 @@
 #include <Geom_BSplineCurve.hxx>
 #include <Poly_Triangulation.hxx>
 #include <TopExp.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopoDS.hxx>
@@ -256,6 +257,24 @@ double sampled_pcurve_gap(const TopoDS_Edge& edge, const TopoDS_Face& face) {
     gap = std::max(gap, in_space.Value(t).Distance(on_face.Value(t)));
   }
   return gap;
+}
+
+int euler_characteristic(const TopoDS_Shape& shape) {
+  TopTools_IndexedMapOfShape vertices, edges, faces;
+  TopExp::MapShapes(shape, TopAbs_FACE, faces);
+  for (TopExp_Explorer e(shape, TopAbs_EDGE); e.More(); e.Next()) {
+    const TopoDS_Edge& edge = TopoDS::Edge(e.Current());
+    if (BRep_Tool::Degenerated(edge)) continue;
+    edges.Add(edge);
+    TopExp::MapShapes(edge, TopAbs_VERTEX, vertices);
+  }
+  int chi = vertices.Extent() - edges.Extent();
+  for (int i = 1; i <= faces.Extent(); ++i) {
+    int wires = 0;
+    for (TopExp_Explorer w(faces(i), TopAbs_WIRE); w.More(); w.Next()) ++wires;
+    chi += 2 - wires;
+  }
+  return chi;
 }
 
 }  // namespace idealize

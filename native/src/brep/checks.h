@@ -57,6 +57,11 @@ void cover_tangent_crossings(const TopoDS_Face& face, double reach);
 // An edge used by one face only (seams and degenerate edges aside).
 bool has_free_edges(const TopoDS_Shape& shape);
 
+// The Euler characteristic V - E + F of a shape's faces as a cell complex: a face bounded by w
+// wires counts 2 - w (a disc with w - 1 holes), a seam once as an edge, a degenerate edge (a pole)
+// not at all. A closed surface of genus g has 2 - 2g; so has the closed mesh it was made from.
+int euler_characteristic(const TopoDS_Shape& shape);
+
 // The largest distance between a B-spline edge's 3D curve and its curve on `face`, at 33
 // parameters (0 for other edges and without the curves).
 double sampled_pcurve_gap(const TopoDS_Edge& edge, const TopoDS_Face& face);
