@@ -90,6 +90,15 @@ def convert(idealize, V: np.ndarray, F: np.ndarray, step_path: Path) -> Dict:
             "step_seconds": written - built, "total_seconds": written - start - solid.timings["brep.deviation"]}
 
 
+def step_reimport(solid, step_path: Path) -> Dict:
+    """The STEP file read back by FreeCAD: valid, as many solids as ours, the same face count."""
+    FreeCAD, Part, Mesh, _ = datasets.freecad_modules()
+    shape = Part.read(str(step_path))
+    bodies = len(solid.part_shape().Solids)
+    return {"valid": bool(shape.isValid()), "solids": len(shape.Solids), "faces": len(shape.Faces),
+            "same": bool(shape.isValid()) and len(shape.Solids) == bodies and len(shape.Faces) == solid.faces}
+
+
 def freecad_builtin(V: np.ndarray, F: np.ndarray, step_path: Path) -> Dict:
     """FreeCAD's route: Part.Shape.makeShapeFromMesh + Part.Solid + removeSplitter."""
     FreeCAD, Part, Mesh, _ = datasets.freecad_modules()
@@ -129,6 +138,11 @@ def bench_mesh(m, gt: Dict, idealize, workdir: Path, builtin: bool) -> Dict:
                max_deviation=solid.max_deviation / m.diag,
                max_tolerance=solid.max_tolerance / run["layer"].distance_tolerance)
     row["volume_error"] = abs(solid.volume - gt["volume"]) / gt["volume"] if solid.solid else None
+    if solid.solid and step_path.exists():
+        try:
+            row["step_reimport"] = step_reimport(solid, step_path)
+        except Exception as exc:  # report, never abort the benchmark
+            row["step_reimport"] = {"same": False, "error": f"{type(exc).__name__}: {exc}"}
     if solid.faces:
         ours = solid.triangulate(SAMPLE_DEFLECTION * m.diag)
         distances = hausdorff(idealize._native, ours, (gt["V"], gt["F"]))
@@ -171,6 +185,7 @@ def summarize(rows: List[Dict]) -> Dict:
             "brep_seconds_median": _median([r["brep_seconds"] for r in ok]),
             "brep_seconds_max": max((r["brep_seconds"] for r in ok), default=None),
             "step_kb_median": _median([r["step_bytes"] / 1024 for r in ok if r["step_bytes"]]),
+            "step_reimport_same": sum(bool(r.get("step_reimport", {}).get("same")) for r in solid),
         }
         builtin = [r for r in vr if "builtin" in r and "seconds" in r["builtin"] and r.get("ok")]
         if builtin:
@@ -272,6 +287,8 @@ def markdown(results: Dict) -> str:
     row("B-rep time after idealization, median / max",
         lambda x: "–" if x["brep_seconds_median"] is None else f"{x['brep_seconds_median']:.3f} / {x['brep_seconds_max']:.3f} s")
     row("STEP size, median", lambda x: "–" if x["step_kb_median"] is None else f"{x['step_kb_median']:.1f} kB")
+    row("STEP read back by FreeCAD: valid, as many solids, the same face count",
+        lambda x: f"{x['step_reimport_same']}/{x['solid']} solids")
     if any("builtin" in s[v] for v in datasets.VARIANTS):
         lines += ["", f"FreeCAD's route (makeShapeFromMesh + Solid + removeSplitter) on the meshes of at most "
                       f"{BUILTIN_MAX_TRIANGLES} triangles, same run:", "",
