@@ -141,8 +141,9 @@ def test_missing_file(tmp_path):
 
 def test_same_input_gives_identical_output(tmp_path):
     """Byte-identical labels and report (timings aside) and STEP (its header's time stamp aside),
-    from separate processes with different thread and hashing settings: the core is
-    single-threaded and nothing depends on addresses or hash order."""
+    from separate processes on one thread and on two (IDEALIZE_THREADS) with different hashing:
+    the items the two threads share out write only what is their own, and nothing depends on
+    addresses or hash order."""
     V, F, _ = shapes.tessellate_with_faces(shapes.bracket_solid(), 0.05)
     rng = np.random.default_rng(7)
     V = V + rng.normal(scale=0.02, size=V.shape)  # a scan: the hard case for exact repeats
@@ -150,7 +151,7 @@ def test_same_input_gives_identical_output(tmp_path):
     write_binary_stl(path, V, F)
     outputs = []
     for run, threads in enumerate(("1", "2")):
-        env = dict(os.environ, OMP_NUM_THREADS=threads, PYTHONHASHSEED=str(run + 11))
+        env = dict(os.environ, IDEALIZE_THREADS=threads, PYTHONHASHSEED=str(run + 11))
         out, report = tmp_path / ("out%d.step" % run), tmp_path / ("report%d.json" % run)
         result = subprocess.run([sys.executable, "-m", "idealize", "convert", str(path), "-o", str(out), "--report",
                                  str(report)], cwd=ROOT, capture_output=True, text=True, timeout=300, env=env)
