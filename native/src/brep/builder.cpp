@@ -2,6 +2,23 @@
 #include "builder.h"
 
 namespace idealize {
+namespace {
+
+// Each side of each triangle, as smaller vertex * #V + larger vertex, sorted (a side shared by two
+// triangles twice).
+std::vector<std::int64_t> sorted_edges(const TriangleMesh& mesh) {
+  std::vector<std::int64_t> edges;
+  edges.reserve(3 * static_cast<size_t>(mesh.num_faces()));
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t a = mesh.F(f, k), b = mesh.F(f, (k + 1) % 3);
+      edges.push_back(std::min(a, b) * mesh.num_vertices() + std::max(a, b));
+    }
+  std::sort(edges.begin(), edges.end());
+  return edges;
+}
+
+}  // namespace
 
 std::vector<int> BrepBuilder::merge_same_surfaces(const std::vector<int>& labels) const {
   std::vector<int> representative(surfaces_.size());
@@ -222,6 +239,11 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   progress_.step(0.0);  // a cancelled Progress stops here, before any work
   auto since = Clock::now();
   const std::vector<int> clean_labels = clean_mesh(labels);
+  {
+    const std::vector<std::int64_t> edges = sorted_edges(clean_);
+    for (size_t i = 0; i < edges.size() && !open_mesh_; ++i)
+      open_mesh_ = (i == 0 || edges[i] != edges[i - 1]) && (i + 1 == edges.size() || edges[i] != edges[i + 1]);
+  }
   progress_.step(0.05);
   const MeshTopology topology(clean_);
   progress_.step(0.15);
@@ -440,17 +462,17 @@ void BrepBuilder::degrade_in_rounds(BrepResult& result, const BrepOptions& optio
 // chains collapsed (a hole narrower than the tolerance) does not.
 void BrepBuilder::check_euler_characteristic(BrepResult& result) const {
   if (!result.solid || result.shape.IsNull()) return;
-  std::vector<std::int64_t> edges;
+  // (An edge of 2k triangles, k sheets touching, is k edges of the facets: one per pair.)
+  const std::vector<std::int64_t> edges = sorted_edges(clean_);
+  long long edge_count = 0;
+  for (size_t i = 0, j = 0; i < edges.size(); i = j) {
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    edge_count += static_cast<long long>(j - i + 1) / 2;
+  }
   std::vector<char> used(clean_.num_vertices(), 0);
   for (int f = 0; f < clean_.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const std::int64_t a = clean_.F(f, k), b = clean_.F(f, (k + 1) % 3);
-      edges.push_back(std::min(a, b) * clean_.num_vertices() + std::max(a, b));
-      used[a] = 1;
-    }
-  std::sort(edges.begin(), edges.end());
-  const auto unique_edges = std::unique(edges.begin(), edges.end()) - edges.begin();
-  result.euler_mesh = static_cast<int>(std::count(used.begin(), used.end(), 1) - unique_edges + clean_.num_faces());
+    for (int k = 0; k < 3; ++k) used[clean_.F(f, k)] = 1;
+  result.euler_mesh = static_cast<int>(std::count(used.begin(), used.end(), 1) - edge_count + clean_.num_faces());
   result.euler_shape = euler_characteristic(result.shape);
   if (result.euler_shape != result.euler_mesh)
     result.problems.push_back({-1, "the solid's Euler characteristic " + std::to_string(result.euler_shape) +

@@ -206,10 +206,10 @@ class BrepBuilder {
   bool valid(const TopoDS_Shape& shape, const ProgressSpan& progress) const;
   std::vector<Handle(Geom_Surface)> facet_planes_;         // (keeps those keys alive)
   std::map<int, std::string> failed_;       // regions whose face failed this round -> why
-  // Whether the mesh has a border (a chain with a region on one side only).
-  bool open_mesh() const {
-    return std::any_of(topo_.chains.begin(), topo_.chains.end(), [](const BoundaryChain& chain) { return chain.right < 0; });
-  }
+  // Whether the mesh has a border: an edge of one triangle. (Along an edge of four triangles, two
+  // sheets touching, the traced chains have no region on their right, but the facets close there.)
+  bool open_mesh() const { return open_mesh_; }
+  bool open_mesh_ = false;
   void fail(int region, const std::string& why) {
     if (region >= 0) failed_.try_emplace(region, why);
   }
