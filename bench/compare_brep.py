@@ -5,6 +5,7 @@ wins and losses part by part.
     /usr/bin/python3 bench/compare_brep.py --baseline /tmp/base            # both, then the table
     /usr/bin/python3 bench/compare_brep.py --only box --variant scan       # a subset, this checkout
     /usr/bin/python3 bench/compare_brep.py --table new.json old.json       # the table of two runs
+    /usr/bin/python3 bench/compare_brep.py --identical new.json old.json   # meshes whose results differ
 
 The baseline is another checkout with its native module built (for example `git worktree add
 /tmp/base <rev>` and `cmake -S /tmp/base -B /tmp/base/build && cmake --build /tmp/base/build`).
@@ -55,7 +56,49 @@ def one(repo: str, kind: str, name: str, variant: str) -> None:
         diagonal = float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
         row.update(mesh_to_solid=solid.mesh_to_shape / diagonal, solid_to_mesh=solid.shape_to_mesh / diagonal,
                    bound=solid.deviation_bound / diagonal, mesh_volume=solid.mesh_volume)
+    row.update(fingerprint(layer, solid))
     print("ROW " + json.dumps(row))
+
+
+def fingerprint(layer, solid) -> dict:
+    """Hashes of everything the feature layer and the solid hold, to show that a change of the code
+    changed no result (`--identical`): labels, idealized vertices, features, adjacency and
+    relations bit for bit, and the shape's BRep text."""
+    import hashlib
+    import numpy as np
+    h = hashlib.sha1()
+    h.update(np.ascontiguousarray(layer.labels, dtype=np.int64).tobytes())
+    h.update(np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64).tobytes())
+
+    def plain(x):  # JSON of numpy values, floats as their exact repr
+        if isinstance(x, dict):
+            return {str(k): plain(v) for k, v in sorted(x.items())}
+        if isinstance(x, (list, tuple)) or isinstance(x, np.ndarray):
+            return [plain(v) for v in (x.tolist() if isinstance(x, np.ndarray) else x)]
+        if isinstance(x, (float, np.floating)):
+            return repr(float(x))
+        if isinstance(x, (np.integer,)):
+            return int(x)
+        return x
+    h.update(json.dumps(plain([layer.features, layer.adjacency, layer.relations])).encode())
+    return dict(layer_hash=h.hexdigest(), solid_hash=hashlib.sha1(solid.brep_string()).hexdigest())
+
+
+def identical(new, old) -> str:
+    """The meshes whose feature layer or solid differ between two runs (hashes from `fingerprint`)."""
+    base = {(r["name"], r["variant"]): r for r in old}
+    lines, same = [], 0
+    for r in sorted(new, key=lambda r: (r["name"], r["variant"])):
+        b = base.get((r["name"], r["variant"]))
+        if b is None:
+            lines.append(f"{r['name']} {r['variant']}: not in the old run")
+            continue
+        what = [k for k in ("layer_hash", "solid_hash", "error") if r.get(k) != b.get(k)]
+        if what:
+            lines.append(f"{r['name']} {r['variant']}: differs in " + ", ".join(what))
+        else:
+            same += 1
+    return "\n".join([f"{same} of {len(new)} meshes identical (feature layer and solid)"] + lines)
 
 
 def run(repo: str, tasks, timeout: float):
@@ -122,11 +165,18 @@ def main() -> int:
     parser.add_argument("--only", action="append", metavar="NAME")
     parser.add_argument("--variant", action="append", choices=("cad", "scan", "sculpt"))
     parser.add_argument("--timeout", type=float, default=900, help="seconds per mesh")
+    parser.add_argument("--out", default="compare-brep-new.json", help="file name of this checkout's results "
+                        "under bench/results/")
     parser.add_argument("--table", nargs=2, metavar=("NEW", "OLD"))
     parser.add_argument("--changed", action="store_true", help="with --table: only the meshes whose result changed")
+    parser.add_argument("--identical", nargs=2, metavar=("NEW", "OLD"),
+                        help="list the meshes whose feature layer or solid differ bit for bit between two runs")
     args = parser.parse_args()
     if args.one:
         one(*args.one)
+        return 0
+    if args.identical:
+        print(identical(json.loads(Path(args.identical[0]).read_text()), json.loads(Path(args.identical[1]).read_text())))
         return 0
     if args.table:
         print(table(json.loads(Path(args.table[0]).read_text()), json.loads(Path(args.table[1]).read_text()),
@@ -140,7 +190,7 @@ def main() -> int:
         tasks += [("real", m["path"], "real") for m in datasets.load_real_meshes()]
     RESULTS.mkdir(parents=True, exist_ok=True)
     new = run(args.checkout, tasks, args.timeout)
-    (RESULTS / "compare-brep-new.json").write_text(json.dumps(new, indent=0))
+    (RESULTS / args.out).write_text(json.dumps(new, indent=0))
     old = []
     if args.baseline:
         old = run(args.baseline, tasks, args.timeout)
