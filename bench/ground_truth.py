@@ -1,6 +1,6 @@
 """Ground truth of the feature benchmark, read from the STEP B-rep: every face's surface type and
 exact parameters, which faces share an edge and whether they meet tangentially, and the relations
-between faces defined as the library defines them (see native/src/feature_graph.h).
+between faces defined as the library defines them (see native/src/features/feature_graph.h).
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@
 //   0: the bytes go in unchanged.
 // Only idealize::MeshError may leave the reader; a mesh it returns must satisfy the reader's
 // contract (finite coordinates, indices in range, at least one triangle), otherwise we abort.
-#include "mesh_io.h"
+#include "io/mesh_io.h"
 
 #include <cmath>
 #include <cstdint>

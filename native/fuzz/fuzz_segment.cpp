@@ -8,8 +8,8 @@
 //   then        faces: 3 bytes each, vertex index = byte % number of vertices
 // segment_mesh and then identify_features (as idealize.idealize calls them from Python) run on it.
 // Only idealize::MeshError may leave them; any other exception or a crash is a finding.
-#include "feature_layer.h"
-#include "segmentation.h"
+#include "features/feature_layer.h"
+#include "segment/segmentation.h"
 
 #include <cmath>
 #include <cstdint>

@@ -3,14 +3,15 @@
 // Python after); C++ exceptions become Python exceptions. They take an optional Progress that
 // another Python thread reads and may cancel while they run.
 #include "brep/brep.h"
-#include "bspline_fitting.h"
-#include "curvature.h"
-#include "feature_layer.h"
-#include "mesh.h"
-#include "mesh_io.h"
-#include "progress.h"
-#include "remesh_cgal.h"
-#include "segmentation.h"
+#include "export/export.h"
+#include "fit/bspline_fitting.h"
+#include "curvature/curvature.h"
+#include "features/feature_layer.h"
+#include "core/mesh.h"
+#include "io/mesh_io.h"
+#include "core/progress.h"
+#include "prepare/remesh_cgal.h"
+#include "segment/segmentation.h"
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>

@@ -13,9 +13,9 @@
 // applies), each corner a vertex at the point closest to all surfaces meeting there.
 #pragma once
 
-#include "../mesh.h"
-#include "../progress.h"
-#include "../surface.h"
+#include "core/mesh.h"
+#include "core/progress.h"
+#include "fit/surface.h"
 
 #include <TopoDS_Shape.hxx>
 
@@ -95,16 +95,5 @@ struct BrepResult {
 // (per feature; freeform features have no face and are reported).
 BrepResult build_brep(const TriangleMesh& mesh, const std::vector<int>& labels,
                       const std::vector<Surface>& surfaces, const BrepOptions& options = {});
-
-// The shape in OCCT's native BRep text format (FreeCAD: Part.Shape().importBrepFromString).
-std::string brep_string(const TopoDS_Shape& shape);
-
-// Writes the shape to a STEP AP214 file in millimetres, faces coloured by surface type. Throws
-// std::runtime_error when the file cannot be written.
-void write_step(const TopoDS_Shape& shape, const std::string& path);
-
-// A triangulation of the shape's faces with chordal deviation at most `deflection`. Reports into
-// `progress` and throws Cancelled when it is cancelled.
-TriangleMesh triangulate(const TopoDS_Shape& shape, double deflection, const ProgressSpan& progress = {});
 
 }  // namespace idealize

@@ -1,5 +1,5 @@
 // The rounds of the B-rep construction, and build_brep (builder.h).
-#include "builder.h"
+#include "brep/builder.h"
 
 namespace idealize {
 namespace {

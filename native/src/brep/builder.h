@@ -11,20 +11,20 @@
 // Internal to native/src/brep/.
 #pragma once
 
-#include "../bspline_fitting.h"
-#include "../occt_signals.h"
-#include "../parallel.h"
-#include "brep.h"
-#include "checks.h"
-#include "corners.h"
-#include "curves.h"
-#include "deviation.h"
-#include "facets.h"
-#include "occt_progress.h"
-#include "solids.h"
-#include "surfaces.h"
-#include "topology.h"
-#include "validity.h"
+#include "fit/bspline_fitting.h"
+#include "brep/occt_signals.h"
+#include "core/parallel.h"
+#include "brep/brep.h"
+#include "brep/checks.h"
+#include "brep/corners.h"
+#include "brep/curves.h"
+#include "brep/deviation.h"
+#include "brep/facets.h"
+#include "brep/occt_progress.h"
+#include "brep/solids.h"
+#include "brep/surfaces.h"
+#include "brep/topology.h"
+#include "brep/validity.h"
 
 #include <BRepAdaptor_Curve.hxx>
 #include <BRepAdaptor_Surface.hxx>

@@ -1,5 +1,5 @@
 // Healing, sewing and the facets joined into shells and solids (builder.h).
-#include "builder.h"
+#include "brep/builder.h"
 
 namespace idealize {
 

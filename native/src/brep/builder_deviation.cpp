@@ -1,5 +1,5 @@
 // Honest validity: the solid lies where its mesh does (deviation.h) (builder.h).
-#include "builder.h"
+#include "brep/builder.h"
 
 namespace idealize {
 

@@ -1,5 +1,5 @@
 // Edge curves along the chains between regions, and the mesh's own border where a region is degraded (builder.h).
-#include "builder.h"
+#include "brep/builder.h"
 
 namespace idealize {
 

@@ -1,5 +1,5 @@
 // Faces on the fitted surfaces, bounded by their loops of edges (builder.h).
-#include "builder.h"
+#include "brep/builder.h"
 
 namespace idealize {
 namespace {

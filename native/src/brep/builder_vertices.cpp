@@ -1,5 +1,5 @@
 // Corner vertices: the point nearest to the surfaces that meet at a corner of the regions (builder.h).
-#include "builder.h"
+#include "brep/builder.h"
 
 namespace idealize {
 namespace {

@@ -1,7 +1,7 @@
 // Checks of faces, shells and solids beyond and around OpenCASCADE's checker (checks.h).
-#include "checks.h"
+#include "brep/checks.h"
 
-#include "occt_progress.h"
+#include "brep/occt_progress.h"
 
 #include <BOPAlgo_ArgumentAnalyzer.hxx>
 #include <BRepAdaptor_Curve.hxx>

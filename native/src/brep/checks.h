@@ -2,7 +2,7 @@
 // mesher or the boolean operations reject, and the repairs that keep a sound face from failing it.
 #pragma once
 
-#include "../progress.h"
+#include "core/progress.h"
 
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>

@@ -1,5 +1,5 @@
 // Corner vertices of the B-rep (corners.h).
-#include "corners.h"
+#include "brep/corners.h"
 
 #include <algorithm>
 #include <cmath>

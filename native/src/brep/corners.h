@@ -2,8 +2,8 @@
 // mesh's regions (thesis 4.3: vertices where three or more features meet).
 #pragma once
 
-#include "../surface.h"
-#include "curves.h"
+#include "fit/surface.h"
+#include "brep/curves.h"
 
 #include <array>
 #include <functional>

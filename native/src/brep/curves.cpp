@@ -1,8 +1,8 @@
 // Edge curves: intersections of two surfaces in closed form, and curves fitted to a chain
 // (curves.h).
-#include "curves.h"
+#include "brep/curves.h"
 
-#include "surfaces.h"
+#include "brep/surfaces.h"
 
 #include <GeomAPI_PointsToBSpline.hxx>
 #include <Geom_BSplineCurve.hxx>

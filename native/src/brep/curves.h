@@ -6,8 +6,8 @@
 // regions; `tol` is the distance below which geometry is equal (the layer's distance tolerance).
 #pragma once
 
-#include "../surface.h"
-#include "occt_util.h"
+#include "fit/surface.h"
+#include "brep/occt_util.h"
 
 #include <Geom_Curve.hxx>
 

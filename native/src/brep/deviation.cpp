@@ -1,8 +1,8 @@
 // Two-sided distance between a B-rep and its mesh (deviation.h).
-#include "deviation.h"
+#include "brep/deviation.h"
 
-#include "../remesh_cgal.h"
-#include "occt_progress.h"
+#include "prepare/remesh_cgal.h"
+#include "brep/occt_progress.h"
 
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepTools.hxx>

@@ -8,8 +8,8 @@
 // shape's triangulation as they are, and lie at distance 0.
 #pragma once
 
-#include "../mesh.h"
-#include "../progress.h"
+#include "core/mesh.h"
+#include "core/progress.h"
 
 #include <TopoDS_Face.hxx>
 

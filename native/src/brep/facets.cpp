@@ -1,4 +1,4 @@
-#include "facets.h"
+#include "brep/facets.h"
 
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>

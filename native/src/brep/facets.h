@@ -8,7 +8,7 @@
 // boundary between features is an edge polyline of the mesh).
 #pragma once
 
-#include "../mesh.h"
+#include "core/mesh.h"
 
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>

@@ -3,7 +3,7 @@
 // says so; the caller then calls ProgressSpan::step or check, which throws Cancelled.
 #pragma once
 
-#include "../progress.h"
+#include "core/progress.h"
 
 #include <Message_ProgressIndicator.hxx>
 #include <Message_ProgressScope.hxx>

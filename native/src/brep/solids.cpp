@@ -1,4 +1,4 @@
-#include "solids.h"
+#include "brep/solids.h"
 
 #include <BRepClass3d_SolidClassifier.hxx>
 #include <BRepGProp.hxx>

@@ -1,5 +1,5 @@
 // The fitted surfaces as OpenCASCADE's (surfaces.h).
-#include "surfaces.h"
+#include "brep/surfaces.h"
 
 #include <Geom_ConicalSurface.hxx>
 #include <Geom_CylindricalSurface.hxx>

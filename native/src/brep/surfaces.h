@@ -2,9 +2,9 @@
 // away from their faces, and freeform features' B-splines with a local tangent plane.
 #pragma once
 
-#include "../bspline_fitting.h"
-#include "../surface.h"
-#include "occt_util.h"
+#include "fit/bspline_fitting.h"
+#include "fit/surface.h"
+#include "brep/occt_util.h"
 
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_Surface.hxx>

@@ -1,4 +1,4 @@
-#include "topology.h"
+#include "brep/topology.h"
 
 #include <algorithm>
 #include <cmath>

@@ -7,8 +7,8 @@
 // Pure C++ on the mesh: the geometry (surfaces, curves) is the builder's (builder.h).
 #pragma once
 
-#include "../mesh.h"
-#include "../surface.h"
+#include "core/mesh.h"
+#include "fit/surface.h"
 
 #include <vector>
 

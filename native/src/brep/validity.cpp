@@ -1,5 +1,5 @@
 // OpenCASCADE's validity check, less the facets (validity.h).
-#include "validity.h"
+#include "brep/validity.h"
 
 #include <BRepCheck_Analyzer.hxx>
 #include <BRepCheck_ListOfStatus.hxx>

@@ -9,7 +9,7 @@
 // their nesting: what the analyzer would check of the whole, less what holds by construction.
 #pragma once
 
-#include "../progress.h"
+#include "core/progress.h"
 
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
