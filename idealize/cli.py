@@ -39,9 +39,9 @@ def convert(args):
     report = build_report(mesh, layer, timings, step, solid)
     if args.report:
         write_report(report, args.report)
-    print("%s: %d triangles, %d features (%s), %.3f s"
-          % (args.input, mesh.n_triangles, len(layer.features), count_summary(layer.type_counts()),
-             timings["total"]))
+    print("%s: %d triangles (%s, noise %.3g), %d features (%s), %.3f s"
+          % (args.input, mesh.n_triangles, layer.mesh_kind, layer.noise, len(layer.features),
+             count_summary(layer.type_counts()), timings["total"]))
     if solid.solid:
         print("solid: %d faces (%s), volume %.6g, written to %s"
               % (solid.faces, count_summary(solid.surface_types), solid.volume, args.output))

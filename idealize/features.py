@@ -31,6 +31,10 @@ class FeatureLayer:
         the surfaces of their features; vertex_deviation: (N,) that distance per vertex (NaN where
         only freeform features touch it). form_deviation: how far the mesh departs from its fitted
         surfaces other than by independent noise (a sculpted part's undulation; about 0 on a scan).
+    mesh_kind: "exact tessellation" (its vertices lie on their faces, as a CAD export's) or "measured
+        surface" (a scan, a sculpted or remeshed mesh), decided once from the typical patch's fit;
+        noise: that patch's spread (distance), normal_noise: its normals' (radians). The B-rep reads
+        them.
     segmentation: the :class:`idealize.Segmentation` the layer was built from (None for a layer
         restored from a document object).
     mesh_check: the segmentation's mesh checks (dict, see :class:`idealize.Segmentation`), None
@@ -50,6 +54,10 @@ class FeatureLayer:
         self.deviation = {"max": result["max_deviation"], "rms": result["rms_deviation"]}
         self.distance_tolerance = result["distance_tolerance"]
         self.form_deviation = result.get("form_deviation")  # None from a layer stored without it
+        # Decided once by the feature stages, read by the B-rep (None from a layer stored without it).
+        self.mesh_kind = result.get("mesh_kind")
+        self.noise = result.get("noise")
+        self.normal_noise = result.get("normal_noise")
         self.mesh_check = segmentation.mesh_check if segmentation is not None else None
         # The input's triangles with the orientation repair applied (the input's own when none).
         self.oriented_faces = segmentation.oriented_faces(mesh.faces) if segmentation is not None else mesh.faces

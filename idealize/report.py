@@ -1,5 +1,6 @@
 """The JSON report of `python -m idealize convert`. Its key names are a public contract."""
 import json
+import math
 
 import numpy as np
 
@@ -32,6 +33,7 @@ def build_report(mesh, layer, timings, step, solid=None):
         "relations": [{"kind": r["kind"], "features": [int(i) for i in r["features"]]} for r in layer.relations],
         "deviation": {"max": float(layer.deviation["max"]), "rms": float(layer.deviation["rms"])},
         "form_deviation": float(layer.form_deviation),
+        "mesh": {"kind": layer.mesh_kind, "noise": float(layer.noise), "normal_noise_degrees": math.degrees(layer.normal_noise)},
         "tolerances": {"distance": float(layer.distance_tolerance)},
         "timings": {name: round(float(seconds), 6) for name, seconds in timings.items()},
         "step": step,

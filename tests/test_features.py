@@ -1020,6 +1020,26 @@ def test_fillets_apart_by_less_than_the_tolerance_are_two_radii_when_their_fits_
 
 
 @needs_freecad
+def test_the_mesh_kind_and_noise_are_decided_once_and_stored():
+    """A CAD tessellation is an exact tessellation and a noisy remesh of the same part a measured
+    surface; the noise stored is about the noise added (σ = 0.1 % of the diagonal), and far above
+    the exact one's. The report carries them."""
+    solid = shapes.bracket_solid()
+    V, F, _ = shapes.cad_export(solid, 0.02, 0.3)
+    exact = idealize.idealize(idealize.Mesh(V, F))
+    assert exact.mesh_kind == "exact tessellation"
+    V2, F2, _, diagonal = shapes.uniform_remesh(solid, 20000)
+    noisy = idealize.idealize(idealize.Mesh(shapes.normal_noise(V2, F2, diagonal, seed=5), F2))
+    assert noisy.mesh_kind == "measured surface"
+    assert 0.5e-3 * diagonal < noisy.noise < 2e-3 * diagonal
+    assert exact.noise < 0.01 * noisy.noise
+    assert 0.0 < noisy.normal_noise < np.radians(30)
+    from idealize.report import build_report
+    report = build_report(idealize.Mesh(V, F), exact, {}, None, None)
+    assert report["mesh"]["kind"] == "exact tessellation" and report["mesh"]["noise"] == exact.noise
+
+
+@needs_freecad
 def test_form_deviation_sees_undulation_and_not_noise():
     """A scan's noise does not correlate between neighbouring vertices; a sculpted part's undulation
     does, and moves whole features off their ideal surfaces: form_deviation measures that."""

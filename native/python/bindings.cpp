@@ -221,6 +221,9 @@ py::dict feature_layer_dict(FeatureLayer&& layer) {
   d["rms_deviation"] = layer.rms_deviation;
   d["distance_tolerance"] = layer.distance_tolerance;
   d["form_deviation"] = layer.form_deviation;
+  d["mesh_kind"] = layer.mesh_kind == MeshKind::ExactTessellation ? "exact tessellation" : "measured surface";
+  d["noise"] = layer.noise;
+  d["normal_noise"] = layer.normal_noise;
   d["timings"] = timings;
   return d;
 }

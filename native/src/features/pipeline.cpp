@@ -200,6 +200,9 @@ FeatureLayer identify_features(const TriangleMesh& mesh, const std::vector<int>&
     state.layer.timings.emplace_back(stage.name, std::chrono::duration<double>(now - start).count());
     start = now;
   }
+  state.layer.mesh_kind = state.exact_mesh ? MeshKind::ExactTessellation : MeshKind::MeasuredSurface;
+  state.layer.noise = state.noise;
+  state.layer.normal_noise = state.normal_noise;
   return std::move(state.layer);
 }
 
