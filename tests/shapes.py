@@ -1,4 +1,5 @@
 """Analytic test meshes made with numpy, and CAD parts made with FreeCAD (when available)."""
+import functools
 import importlib
 import sys
 from pathlib import Path
@@ -8,7 +9,18 @@ import pytest
 
 # The real parts of ../shared/data, beside the repository (never copied into it).
 SHARED_STEP = Path(__file__).resolve().parents[2] / "shared" / "data" / "step"
-needs_shared_data = pytest.mark.skipif(not SHARED_STEP.is_dir(), reason="../shared/data is not beside the repository")
+
+
+def needs_shared_data(test):
+    """Marks a test that reads ../shared/data. Without the data it fails and says so; it never
+    skips silently."""
+    @functools.wraps(test)
+    def checked(*args, **kwargs):
+        if not SHARED_STEP.is_dir():
+            pytest.fail("this test reads the project's test data, which must sit beside the repository: %s is "
+                        "missing" % SHARED_STEP.parent, pytrace=False)
+        return test(*args, **kwargs)
+    return checked
 
 
 def icosphere(radius=1.0, subdivisions=4):
