@@ -7,6 +7,7 @@
 #include "features/edge_fillets.h"
 #include "features/identify.h"
 #include "features/merge.h"
+#include "features/profile_splits.h"
 #include "features/retyping.h"
 #include "features/shared_axes.h"
 
