@@ -18,6 +18,17 @@ std::vector<std::int64_t> sorted_edges(const TriangleMesh& mesh) {
   return edges;
 }
 
+// The edges of the facets, from sorted_edges: an edge of 2k triangles, k sheets touching, is k
+// edges of the facets (one per pair).
+long long facet_edge_count(const std::vector<std::int64_t>& edges) {
+  long long edge_count = 0;
+  for (size_t i = 0, j = 0; i < edges.size(); i = j) {
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    edge_count += static_cast<long long>(j - i + 1) / 2;
+  }
+  return edge_count;
+}
+
 }  // namespace
 
 std::vector<int> BrepBuilder::merge_same_surfaces(const std::vector<int>& labels) const {
@@ -137,10 +148,10 @@ std::vector<int> BrepBuilder::join_explained_regions(std::vector<int> face_featu
     }
   }
   if (residuals.empty()) return face_feature;
-  // The noise as measure_fits estimates it (the median residual is 0.6745 sigma; the largest of n
-  // is about sigma sqrt(2 ln n)), and what the layer calls an exact fit.
-  std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
-  const double sigma = 1.4826 * residuals[residuals.size() / 2];
+  // The noise (noise_sigma, over the vertices of the regions with an analytic surface, before any
+  // joins; measure_fits takes those of every region with a surface, after them; the largest of n
+  // residuals is about sigma sqrt(2 ln n)), and what the layer calls an exact fit.
+  const double sigma = noise_sigma(std::move(residuals));
   const double exact = std::max(kExactFraction * tol_, 2.0 * coordinate_floor(clean_));
   for (const BoundaryChain& chain : topo_.chains) {
     if (chain.right < 0) continue;
@@ -239,10 +250,12 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   progress_.step(0.0);  // a cancelled Progress stops here, before any work
   auto since = Clock::now();
   const std::vector<int> clean_labels = clean_mesh(labels);
+  long long mesh_edges = 0;  // for the Euler characteristic
   {
     const std::vector<std::int64_t> edges = sorted_edges(clean_);
     for (size_t i = 0; i < edges.size() && !open_mesh_; ++i)
       open_mesh_ = (i == 0 || edges[i] != edges[i - 1]) && (i + 1 == edges.size() || edges[i] != edges[i + 1]);
+    mesh_edges = facet_edge_count(edges);
   }
   progress_.step(0.05);
   const MeshTopology topology(clean_);
@@ -269,7 +282,7 @@ BrepResult BrepBuilder::run(const std::vector<int>& labels, const BrepOptions& o
   measure_fits();
   stage(result, "brep.edges", since);
   degrade_in_rounds(result, options);
-  check_euler_characteristic(result);
+  check_euler_characteristic(result, mesh_edges);
   stage(result, "brep.faces", since);
   report_regions(result);
   return result;
@@ -459,16 +472,10 @@ void BrepBuilder::degrade_in_rounds(BrepResult& result, const BrepOptions& optio
 
 // The closed shape against the mesh: as many bodies and handles (thesis 4.3.3: the topology is
 // the mesh's). Collapsed chains and joined regions leave it unchanged; a loop lost with all its
-// chains collapsed (a hole narrower than the tolerance) does not.
-void BrepBuilder::check_euler_characteristic(BrepResult& result) const {
+// chains collapsed (a hole narrower than the tolerance) does not. `edge_count`: the clean mesh's
+// (facet_edge_count).
+void BrepBuilder::check_euler_characteristic(BrepResult& result, long long edge_count) const {
   if (!result.solid || result.shape.IsNull()) return;
-  // (An edge of 2k triangles, k sheets touching, is k edges of the facets: one per pair.)
-  const std::vector<std::int64_t> edges = sorted_edges(clean_);
-  long long edge_count = 0;
-  for (size_t i = 0, j = 0; i < edges.size(); i = j) {
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    edge_count += static_cast<long long>(j - i + 1) / 2;
-  }
   std::vector<char> used(clean_.num_vertices(), 0);
   for (int f = 0; f < clean_.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) used[clean_.F(f, k)] = 1;

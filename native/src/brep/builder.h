@@ -105,6 +105,11 @@
 
 namespace idealize {
 
+// The noise of a mesh about its surfaces, from the distances of its vertices (0 for none): sigma of
+// Gaussian residuals, whose median is 0.6745 sigma (1.4826 = 1 / 0.6745), robust to the blurred
+// edges and to a region its surface does not explain.
+double noise_sigma(std::vector<double> residuals);
+
 class BrepBuilder {
  public:
   BrepBuilder(const TriangleMesh& mesh, const std::vector<Surface>& surfaces, const BrepOptions& options)
@@ -130,7 +135,7 @@ class BrepBuilder {
   void make_region_surfaces();
   void degrade_in_rounds(BrepResult& result, const BrepOptions& options);
   void report_regions(BrepResult& result) const;
-  void check_euler_characteristic(BrepResult& result) const;
+  void check_euler_characteristic(BrepResult& result, long long edge_count) const;
   std::vector<int> merge_same_surfaces(const std::vector<int>& labels) const;
   std::optional<RoundFace> round_face(int region) const;
   bool split_at_seam(int chain, const Handle(Geom_Curve)& curve, double u0, double u1, const TopoDS_Vertex& v0,

@@ -3,6 +3,21 @@
 
 namespace idealize {
 
+namespace {
+
+// Raises an edge's tolerance to cover a gap between its curves larger than it (by 1 %), and its
+// vertices' to at least as much.
+void cover_gap(const TopoDS_Edge& edge, double gap) {
+  if (!(gap > BRep_Tool::Tolerance(edge))) return;
+  BRep_Builder builder;
+  const double tolerance = 1.01 * gap;
+  builder.UpdateEdge(edge, tolerance);
+  for (TopExp_Explorer v(edge, TopAbs_VERTEX); v.More(); v.Next())
+    builder.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
+}
+
+}  // namespace
+
 // The sewn analytic faces and the facets, whose edges and vertices are replaced by those that
 // healing (`healed`) and then sewing made of them, grouped into connected shells.
 TopoDS_Shape BrepBuilder::with_facets(const TopoDS_Shape& sewn, const BRepBuilderAPI_Sewing& sewing,
@@ -146,14 +161,7 @@ std::vector<char> BrepBuilder::fit_edge_tolerances(BrepResult& result) {
       result.problems.push_back({topo_.region_feature[face_region_[i]], why + ": left out"});
       fail(face_region_[i], why);
     }
-  BRep_Builder tolerances;
-  for (const PcurveGap& g : pcurve_gaps) {
-    if (!(g.gap > BRep_Tool::Tolerance(g.edge))) continue;
-    const double tolerance = 1.01 * g.gap;
-    tolerances.UpdateEdge(g.edge, tolerance);
-    for (TopExp_Explorer v(g.edge, TopAbs_VERTEX); v.More(); v.Next())
-      tolerances.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
-  }
+  for (const PcurveGap& g : pcurve_gaps) cover_gap(g.edge, g.gap);
   for (int i = 0; i < face_count; ++i) {
     if (face_facet_[i]) continue;
     try {
@@ -177,7 +185,6 @@ void BrepBuilder::cover_sewn_pcurve_gaps(const TopoDS_Shape& shape) const {
     double gap = 0.0;
   };
   std::vector<Use> uses;
-  TopTools_IndexedMapOfShape seen;
   for (TopExp_Explorer f(shape, TopAbs_FACE); f.More(); f.Next()) {
     const TopoDS_Face& face = TopoDS::Face(f.Current());
     if (is_facet(face)) continue;  // (a facet's edges lie in its plane: their pcurves are exact)
@@ -194,14 +201,8 @@ void BrepBuilder::cover_sewn_pcurve_gaps(const TopoDS_Shape& shape) const {
     } catch (const Standard_Failure&) {
     }
   }, progress_);
-  BRep_Builder builder;
-  for (const Use& use : uses) {
-    if (!(use.gap > BRep_Tool::Tolerance(use.edge)) || use.gap >= kStrayEdge * tol_) continue;
-    const double tolerance = 1.01 * use.gap;
-    builder.UpdateEdge(use.edge, tolerance);
-    for (TopExp_Explorer v(use.edge, TopAbs_VERTEX); v.More(); v.Next())
-      builder.UpdateVertex(TopoDS::Vertex(v.Current()), std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Vertex(v.Current()))));
-  }
+  for (const Use& use : uses)
+    if (use.gap < kStrayEdge * tol_) cover_gap(use.edge, use.gap);
 }
 
 // The faces that need no healing: valid as built (planar facets by construction), and bounded.

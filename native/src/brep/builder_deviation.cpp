@@ -3,6 +3,12 @@
 
 namespace idealize {
 
+double noise_sigma(std::vector<double> residuals) {
+  if (residuals.empty()) return 0.0;
+  std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
+  return 1.4826 * residuals[residuals.size() / 2];
+}
+
 // What the honest-validity check measures once: how far each region's mesh may lie from its
 // surface where the surface explains it (the sagitta of its triangles and the extent of the
 // mesh's noise), each curve's distance from its chain (a sharp edge laid over a rounded one), and
@@ -36,14 +42,8 @@ void BrepBuilder::measure_fits() {
       region_fit_[r] = std::max(region_fit_[r], distance(middle) - corners);
     }
   }
-  // The noise: the median residual of a Gaussian is 0.6745 sigma (1.4826 = 1 / 0.6745), robust to
-  // the blurred edges and to a region its surface does not explain. The largest of n Gaussian
-  // residuals is about sigma sqrt(2 ln n).
-  double sigma = 0.0;
-  if (!residuals.empty()) {
-    std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
-    sigma = 1.4826 * residuals[residuals.size() / 2];
-  }
+  // The noise (noise_sigma). The largest of n Gaussian residuals is about sigma sqrt(2 ln n).
+  const double sigma = noise_sigma(std::move(residuals));
   region_noise_.assign(regions, 0.0);
   for (int r = 0; r < regions; ++r) {
     if (counts[r] > 1) region_noise_[r] = sigma * std::sqrt(2.0 * std::log(static_cast<double>(counts[r])));
