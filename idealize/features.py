@@ -34,7 +34,7 @@ class FeatureLayer:
     mesh_kind: "exact tessellation" (its vertices lie on their faces, as a CAD export's) or "measured
         surface" (a scan, a sculpted or remeshed mesh), decided once from the typical patch's fit;
         noise: that patch's spread (distance), normal_noise: its normals' (radians). The B-rep reads
-        them.
+        the kind. angle_tolerance: the one used, in degrees (the B-rep's too).
     segmentation: the :class:`idealize.Segmentation` the layer was built from (None for a layer
         restored from a document object).
     mesh_check: the segmentation's mesh checks (dict, see :class:`idealize.Segmentation`), None
@@ -56,6 +56,7 @@ class FeatureLayer:
         self.form_deviation = result.get("form_deviation")  # None from a layer stored without it
         # Decided once by the feature stages, read by the B-rep (None from a layer stored without it).
         self.mesh_kind = result.get("mesh_kind")
+        self.angle_tolerance = result.get("angle_tolerance_degrees")
         self.noise = result.get("noise")
         self.normal_noise = result.get("normal_noise")
         self.mesh_check = segmentation.mesh_check if segmentation is not None else None

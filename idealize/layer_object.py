@@ -185,6 +185,7 @@ class LayerRecord:
             "features": layer.features, "adjacency": layer.adjacency, "relations": layer.relations,
             "deviation": layer.deviation, "distance_tolerance": layer.distance_tolerance,
             "form_deviation": layer.form_deviation, "mesh_kind": layer.mesh_kind, "noise": layer.noise,
+            "angle_tolerance_degrees": layer.angle_tolerance,
             "normal_noise": layer.normal_noise, "mesh_check": layer.mesh_check}))
         self.vertex_deviation = np.asarray(layer.vertex_deviation, dtype=np.float64).tolist()
         self.fingerprint = fingerprint(layer.mesh, options)
@@ -352,7 +353,8 @@ def feature_layer(obj):
         "vertex_deviation": np.asarray(obj.VertexDeviation, dtype=np.float64),
         "max_deviation": table["deviation"]["max"], "rms_deviation": table["deviation"]["rms"],
         "distance_tolerance": table["distance_tolerance"], "form_deviation": table.get("form_deviation"),
-        "mesh_kind": table.get("mesh_kind"), "noise": table.get("noise"), "normal_noise": table.get("normal_noise"),
+        "mesh_kind": table.get("mesh_kind"), "noise": table.get("noise"),
+        "angle_tolerance_degrees": table.get("angle_tolerance_degrees"), "normal_noise": table.get("normal_noise"),
         "timings": []})
     layer.mesh_check = table.get("mesh_check")
     layer.oriented_faces = idealized.faces  # stored with the orientation repair

@@ -1109,3 +1109,29 @@ def test_real_closed_meshes_give_valid_solids(name):
     assert solid.euler["solid"] == solid.euler["mesh"]
     assert all(r["reason"] for r in solid.regions if r["kind"] == "faceted")
     assert 0.0 <= solid.analytic_area_fraction <= 1.0
+
+
+@needs_freecad
+def test_the_brep_reads_the_layers_mesh_kind_and_angle_tolerance():
+    """The B-rep takes the feature layer's decision about the mesh. On a scan, rounds narrower than
+    the sampling (here two fillets of 0.6 on edges of about 0.8) are strips that go back to the
+    planes beside them; told the mesh is an exact tessellation, it keeps every feature's face. The
+    layer's angle tolerance reaches it too, and bad values are refused with a message."""
+    from idealize._loader import native
+    _, Part, _ = shapes.freecad()
+    box = Part.makeBox(40, 30, 20)
+    box = box.makeFillet(0.6, [box.Edges[0], box.Edges[2]])
+    V, F, _, diagonal = shapes.uniform_remesh(box, 20000)
+    V = shapes.normal_noise(V, F, diagonal, seed=2)
+    layer = idealize.idealize(idealize.Mesh(V, F), angle_tolerance=4.0)
+    assert layer.mesh_kind == "measured surface" and layer.angle_tolerance == 4.0
+    assert layer.type_counts() == {"plane": 6, "cylinder": 2}
+    assert dict(idealize.make_solid(layer).surface_types) == {"plane": 6}
+    args = (V, layer.oriented_faces, np.asarray(layer.labels, np.int32), [f["type"] for f in layer.features],
+            [dict(f["params"]) for f in layer.features], layer.distance_tolerance)
+    exact = native.build_brep(*args, mesh_kind="exact tessellation")
+    assert exact.solid and dict(exact.surface_types) == {"plane": 6, "cylinder": 2}
+    with pytest.raises(ValueError, match="mesh_kind"):
+        native.build_brep(*args, mesh_kind="scan")
+    with pytest.raises(ValueError, match="angle tolerance"):
+        native.build_brep(*args, angle_tolerance=0.0)

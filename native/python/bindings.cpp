@@ -221,6 +221,7 @@ py::dict feature_layer_dict(FeatureLayer&& layer) {
   d["rms_deviation"] = layer.rms_deviation;
   d["distance_tolerance"] = layer.distance_tolerance;
   d["form_deviation"] = layer.form_deviation;
+  d["angle_tolerance_degrees"] = layer.angle_tolerance_degrees;
   d["mesh_kind"] = layer.mesh_kind == MeshKind::ExactTessellation ? "exact tessellation" : "measured surface";
   d["noise"] = layer.noise;
   d["normal_noise"] = layer.normal_noise;
@@ -407,7 +408,7 @@ PYBIND11_MODULE(_native, m) {
       "build_brep",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, std::vector<int> labels,
          const std::vector<std::string>& types, const std::vector<py::dict>& params, double tolerance,
-         Progress* progress) {
+         Progress* progress, std::optional<std::string> mesh_kind, double angle_tolerance) {
         if (types.size() != params.size()) throw std::invalid_argument("one type and one parameter set per feature");
         std::vector<Surface> surfaces;
         for (size_t i = 0; i < types.size(); ++i) surfaces.push_back(surface_from_params(types[i], params[i]));
@@ -415,6 +416,14 @@ PYBIND11_MODULE(_native, m) {
         BrepOptions options;
         options.tolerance = tolerance;
         options.progress = progress;
+        if (mesh_kind) {
+          if (*mesh_kind == "exact tessellation") options.mesh_kind = MeshKind::ExactTessellation;
+          else if (*mesh_kind == "measured surface") options.mesh_kind = MeshKind::MeasuredSurface;
+          else throw std::invalid_argument("mesh_kind is \"exact tessellation\" or \"measured surface\", not \"" + *mesh_kind + "\"");
+        }
+        if (!(angle_tolerance > 0.0 && angle_tolerance < 90.0))
+          throw std::invalid_argument("the angle tolerance must lie between 0 and 90 degrees");
+        options.angle_tolerance_degrees = angle_tolerance;
         BrepResult result;
         {
           py::gil_scoped_release release;
@@ -423,8 +432,11 @@ PYBIND11_MODULE(_native, m) {
         return result;
       },
       py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("tolerance") = 0.0,
-      py::kw_only(), py::arg("progress") = nullptr,
-      "Fitted B-rep of a labelled mesh whose features lie on the given surfaces.");
+      py::kw_only(), py::arg("progress") = nullptr, py::arg("mesh_kind") = py::none(),
+      py::arg("angle_tolerance") = BrepOptions{}.angle_tolerance_degrees,
+      "Fitted B-rep of a labelled mesh whose features lie on the given surfaces. mesh_kind: the feature "
+      "layer's (\"exact tessellation\" or \"measured surface\"; None: judged from the fit); angle_tolerance: "
+      "the layer's, in degrees.");
 
   m.def(
       "mesh_distances",

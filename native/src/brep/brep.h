@@ -20,6 +20,7 @@
 #include <TopoDS_Shape.hxx>
 
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -32,6 +33,14 @@ struct BrepOptions {
   double tolerance = 0.0;
   // Merge faces and edges that lie on the same surface or curve (ShapeUpgrade_UnifySameDomain).
   bool unify = true;
+  // What the mesh is, as the feature layer decided it (FeatureLayer::mesh_kind). Unset for a layer
+  // stored without it: then the builder judges as the layer does, from how exactly the surfaces
+  // pass through the vertices.
+  std::optional<MeshKind> mesh_kind;
+  // The feature layer's angle tolerance (FeatureLayer::angle_tolerance_degrees): directions this
+  // close are parallel where no exact closed form is found, and surfaces whose normals differ by
+  // less along an edge meet tangentially (the feature graph's G1 criterion).
+  double angle_tolerance_degrees = 5.0;
   // Receives the progress (0..1 over the call) and is polled for cancellation (throws Cancelled).
   Progress* progress = nullptr;
 };

@@ -71,17 +71,22 @@ std::vector<int> BrepBuilder::dissolve_sampling_blends(const TriangleMesh& mesh,
     }
   }
   if (edges.empty()) return labels;
-  // Exact tessellation: half or more of the features fit exactly, as the feature layer decides it
-  // (a CAD export's vertices may lie on a B-spline approximation of its tori, a few thousandths
-  // of the tolerance off the ideal surface; or be rounded to single precision far from the origin).
-  const double exact_rms = std::max(kExactFraction * tol_, 2.0 * coordinate_floor(mesh));
-  int exact = 0, fitted = 0;
-  for (int i = 0; i < features; ++i) {
-    if (count[i] == 0) continue;
-    ++fitted;
-    exact += std::sqrt(squared[i] / count[i]) < exact_rms;
+  // An exact tessellation keeps every feature: as the feature layer decided it, or, for a layer
+  // stored without its decision, where half or more of the features fit exactly (a CAD export's
+  // vertices may lie on a B-spline approximation of its tori, a few thousandths of the tolerance
+  // off the ideal surface; or be rounded to single precision far from the origin).
+  if (mesh_kind_) {
+    if (*mesh_kind_ == MeshKind::ExactTessellation) return labels;
+  } else {
+    const double exact_rms = std::max(kExactFraction * tol_, 2.0 * coordinate_floor(mesh));
+    int exact = 0, fitted = 0;
+    for (int i = 0; i < features; ++i) {
+      if (count[i] == 0) continue;
+      ++fitted;
+      exact += std::sqrt(squared[i] / count[i]) < exact_rms;
+    }
+    if (2 * exact >= fitted) return labels;
   }
-  if (2 * exact >= fitted) return labels;
   std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
   const double spacing = edges[edges.size() / 2];
   // A scanner samples about evenly in every direction (the benchmark's scans: a typical facet's

@@ -118,6 +118,9 @@ class BrepBuilder {
     diagonal_ = bounding_box_diagonal(mesh);
     tol_ = options.tolerance > 0 ? options.tolerance : 1e-3 * diagonal_;
     angle_eps_ = std::max(1e-9, tol_ / std::max(diagonal_, 1e-300));
+    mesh_kind_ = options.mesh_kind;
+    tangent_angle_ = options.angle_tolerance_degrees * M_PI / 180.0;
+    nearly_parallel_ = std::sin(tangent_angle_);
   }
 
   BrepResult run(const std::vector<int>& labels, const BrepOptions& options);
@@ -179,6 +182,10 @@ class BrepBuilder {
   // Shares of the whole run, as measured on a scan of a million triangles.
   const ProgressSpan progress_;
   double diagonal_ = 0, tol_ = 0, angle_eps_ = 0;
+  std::optional<MeshKind> mesh_kind_;  // as the feature layer decided it (BrepOptions::mesh_kind)
+  // The layer's angle tolerance: the G1 angle (radians) and its sine, within which directions are
+  // parallel where no exact closed form is found.
+  double tangent_angle_ = 0, nearly_parallel_ = 0;
   BoundaryTopology topo_;
   std::map<int, FreeformSurface> freeform_;  // feature -> its fitted B-spline
   std::vector<Handle(Geom_Surface)> region_surfaces_;

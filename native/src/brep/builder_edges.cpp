@@ -75,10 +75,11 @@ BrepBuilder::ChainCurve BrepBuilder::chain_curve(size_t c) const {
     std::vector<Vec3> ends;
     if (!chain.closed) ends = {corner_points_.at(chain.vertices.front()), corner_points_.at(chain.vertices.back())};
     for (const auto& [angle_eps, gap, exact] :
-         {std::tuple{angle_eps_, tol_, true}, std::tuple{kNearlyParallel, 5 * tol_, false}}) {
+         {std::tuple{angle_eps_, tol_, true}, std::tuple{nearly_parallel_, 5 * tol_, false}}) {
       if (b && analytic && curve.IsNull())
-        curve = closed_form_curve(a, *b, points, exact ? ends : std::vector<Vec3>(), angle_eps, gap);
-      if (curve && max_distance_to_curve(curve, points) > (tangent_along(curve, a, *b, points) ? 0.05 * diagonal_ : 5 * tol_))
+        curve = closed_form_curve(a, *b, points, exact ? ends : std::vector<Vec3>(), angle_eps, gap, nearly_parallel_);
+      if (curve && max_distance_to_curve(curve, points) >
+                       (tangent_along(curve, a, *b, points, tangent_angle_) ? 0.05 * diagonal_ : 5 * tol_))
         curve.Nullify();
     }
     report.curve = curve.IsNull() ? "" : "closed form";

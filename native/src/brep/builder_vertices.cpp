@@ -75,10 +75,11 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
         for (int u : chain.vertices) raw.push_back(mesh_.V.row(u).transpose());
         const LocalSurface local_a = [&a](const Vec3&) { return a; }, local_b = [&b](const Vec3&) { return b; };
         const std::vector<Vec3> points = project_on_both(raw, local_a, &local_b);
-        contact = closed_form_curve(a, b, points, {}, angle_eps_, tol_);
-        if (contact.IsNull()) contact = closed_form_curve(a, b, points, {}, kNearlyParallel, 5 * tol_);  // as make_edges
+        contact = closed_form_curve(a, b, points, {}, angle_eps_, tol_, nearly_parallel_);
+        if (contact.IsNull())  // as make_edges
+          contact = closed_form_curve(a, b, points, {}, nearly_parallel_, 5 * tol_, nearly_parallel_);
         if (contact && (!(contact->IsKind(STANDARD_TYPE(Geom_Circle)) || contact->IsKind(STANDARD_TYPE(Geom_Line))) ||
-                        !tangent_along(contact, a, b, points)))
+                        !tangent_along(contact, a, b, points, tangent_angle_)))
           contact.Nullify();
       }
       if (contact.IsNull()) continue;
@@ -114,7 +115,7 @@ void BrepBuilder::make_vertices(const MeshTopology& topology) {
     const std::array<const Surface*, 2> thirds = {third(f->second), third(b->second)};
     if (!thirds[0] || !thirds[1] || thirds[0]->type == SurfaceType::Plane || thirds[1]->type == SurfaceType::Plane) continue;
     const auto ends = line_chain_ends(a, c, thirds, {mesh_.V.row(front).transpose(), mesh_.V.row(back).transpose()},
-                                      {corner_points_[front], corner_points_[back]}, tol_);
+                                      {corner_points_[front], corner_points_[back]}, tol_, nearly_parallel_);
     if (!ends) continue;
     corner_points_[front] = ends->first;
     corner_points_[back] = ends->second;

@@ -74,9 +74,10 @@ std::vector<double> line_meets(const std::function<double(double)>& distance, do
 std::optional<std::pair<Vec3, Vec3>> line_chain_ends(const Surface& a, const Surface& b,
                                                      const std::array<const Surface*, 2>& third,
                                                      const std::array<Vec3, 2>& mesh_corners,
-                                                     const std::array<Vec3, 2>& fitted, double tol) {
+                                                     const std::array<Vec3, 2>& fitted, double tol,
+                                                     double nearly_parallel) {
   const Vec3 cross = a.axis.cross(b.axis);
-  if (cross.norm() < kNearlyParallel) return std::nullopt;
+  if (cross.norm() < nearly_parallel) return std::nullopt;
   const Vec3 dir = cross.normalized();
   const Vec3 origin = point_on_both_planes(a, b, 0.5 * (mesh_corners[0] + mesh_corners[1]));
   const auto at = [&](double t) { return Vec3(origin + t * dir); };

@@ -25,11 +25,13 @@ std::vector<double> line_meets(const std::function<double(double)>& distance, do
 
 // The corners at both ends of a straight chain between planes `a` and `b`, each where their line
 // meets the `third` surface at that end: the points nearest to the mesh's corners that keep the
-// chain's order with no crossing of either surface between them. Null where no such pair is found.
+// chain's order with no crossing of either surface between them. Null where no such pair is found,
+// or where the planes are parallel to within `nearly_parallel` (a sine).
 std::optional<std::pair<Vec3, Vec3>> line_chain_ends(const Surface& a, const Surface& b,
                                                      const std::array<const Surface*, 2>& third,
                                                      const std::array<Vec3, 2>& mesh_corners,
-                                                     const std::array<Vec3, 2>& fitted, double tol);
+                                                     const std::array<Vec3, 2>& fitted, double tol,
+                                                     double nearly_parallel);
 
 // What fixes a corner: the surfaces that meet there, a cylinder tangent to a sphere of its radius
 // replaced by the plane through the sphere's centre normal to its axis.

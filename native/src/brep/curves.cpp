@@ -163,7 +163,8 @@ Vec3 point_on_both_planes(const Surface& a, const Surface& b, const Vec3& near) 
 // The intersection curve of `a` and `b` in closed form, or null; `ends`: the corner points of an
 // open chain (none for a closed one), which choose the branch (edge_branch).
 Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const std::vector<Vec3>& points,
-                                     const std::vector<Vec3>& ends, double angle_eps, double tol) {
+                                     const std::vector<Vec3>& ends, double angle_eps, double tol,
+                                     double nearly_parallel) {
   if (a.type == SurfaceType::Plane && b.type == SurfaceType::Plane) {
     const Vec3 dir = a.axis.cross(b.axis);
     if (dir.norm() < angle_eps) return nullptr;
@@ -218,7 +219,7 @@ Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const s
     const Vec3& n = other.axis;
     const double cosine = n.dot(dir);
     const bool parallel = other.type == SurfaceType::Plane ? std::abs(cosine) <= angle_eps : n.cross(dir).norm() <= angle_eps;
-    if (other.type == SurfaceType::Plane && std::abs(cosine) > kNearlyParallel && n.cross(dir).norm() > kNearlyParallel) {
+    if (other.type == SurfaceType::Plane && std::abs(cosine) > nearly_parallel && n.cross(dir).norm() > nearly_parallel) {
       // An oblique plane cuts the cylinder in an ellipse about the point where the axis crosses it:
       // the radius across the tilt, stretched by the tilt along it. (A plane nearly parallel to
       // the axis touches it along a line, one nearly square to it cuts a circle: the second pass's
@@ -349,9 +350,8 @@ std::vector<Vec3> project_on_both(const std::vector<Vec3>& chain, const LocalSur
   return result;
 }
 
-// Whether two surfaces meet tangentially along a curve of both (the median angle between their
-// normals at the points' nearest curve points below 5 degrees, the feature graph's G1 criterion).
-bool tangent_along(const Handle(Geom_Curve)& curve, const Surface& a, const Surface& b, const std::vector<Vec3>& points) {
+bool tangent_along(const Handle(Geom_Curve)& curve, const Surface& a, const Surface& b, const std::vector<Vec3>& points,
+                   double max_angle) {
   std::vector<double> angles;
   const size_t step = std::max<size_t>(1, points.size() / 16);
   for (size_t i = 0; i < points.size(); i += step) {
@@ -360,7 +360,7 @@ bool tangent_along(const Handle(Geom_Curve)& curve, const Surface& a, const Surf
     angles.push_back(std::acos(std::min(1.0, c)));
   }
   std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
-  return angles[angles.size() / 2] < 5.0 * M_PI / 180.0;
+  return angles[angles.size() / 2] < max_angle;
 }
 
 }  // namespace idealize

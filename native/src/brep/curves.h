@@ -18,7 +18,7 @@
 namespace idealize {
 
 // sin(5 degrees): directions this close count as parallel when an exact closed form is not found
-// (the feature graph's parallel tolerance).
+// (the feature graph's default parallel tolerance; BrepOptions::angle_tolerance_degrees sets it).
 inline constexpr double kNearlyParallel = 0.0872;
 inline constexpr int kToleranceSamples = 64;  // points of a fitted edge measured against its two surfaces
 
@@ -51,8 +51,12 @@ Vec3 point_on_both_planes(const Surface& a, const Surface& b, const Vec3& near);
 
 // The intersection curve of `a` and `b` in closed form through the chain's `points`, or null.
 // `ends`: the corner points of an open chain (none for a closed one), which choose the branch.
+// Directions within `angle_eps` (a sine) are parallel; a plane cuts a cylinder in an ellipse only
+// where it is oblique by more than `nearly_parallel` (a sine: nearer, the pass with that
+// `angle_eps` makes a line or a circle).
 Handle(Geom_Curve) closed_form_curve(const Surface& a, const Surface& b, const std::vector<Vec3>& points,
-                                     const std::vector<Vec3>& ends, double angle_eps, double tol);
+                                     const std::vector<Vec3>& ends, double angle_eps, double tol,
+                                     double nearly_parallel = kNearlyParallel);
 
 // The parameter of the point of `curve` closest to `p`; the nearer end of a bounded curve when `p`
 // projects beyond it.
@@ -82,8 +86,10 @@ using LocalSurface = std::function<Surface(const Vec3&)>;
 // onto `a` alone when `b` is null.
 std::vector<Vec3> project_on_both(const std::vector<Vec3>& chain, const LocalSurface& a, const LocalSurface* b);
 
-// Whether two surfaces meet tangentially along `curve` (the median angle between their normals at
-// the points' nearest curve points below 5 degrees, the feature graph's G1 criterion).
-bool tangent_along(const Handle(Geom_Curve)& curve, const Surface& a, const Surface& b, const std::vector<Vec3>& points);
+// Whether two surfaces meet tangentially along `curve`: the median angle between their normals at
+// the points' nearest curve points is below `max_angle` (radians; the feature graph's G1 criterion,
+// its angle tolerance).
+bool tangent_along(const Handle(Geom_Curve)& curve, const Surface& a, const Surface& b, const std::vector<Vec3>& points,
+                   double max_angle);
 
 }  // namespace idealize

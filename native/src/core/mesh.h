@@ -103,4 +103,8 @@ double coordinate_floor(const TriangleMesh& mesh);
 // Median length of the mesh's edges (0 for a mesh without edges).
 double median_edge_length(const TriangleMesh& mesh, const MeshTopology& topology);
 
+// What a mesh is: an exact tessellation (its vertices lie on their faces, as a CAD export's do) or
+// a measured surface (a scan, a sculpted or remeshed surface: noise, undulation).
+enum class MeshKind { ExactTessellation, MeasuredSurface };
+
 }  // namespace idealize

@@ -119,10 +119,6 @@ struct FeatureRelation {
   std::vector<int> features;  // a group of two or more features (pairs for perpendicular and tangent)
 };
 
-// What a mesh is: an exact tessellation (its vertices lie on their faces, as a CAD export's do) or
-// a measured surface (a scan, a sculpted or remeshed surface: noise, undulation).
-enum class MeshKind { ExactTessellation, MeasuredSurface };
-
 struct FeatureLayer {
   std::vector<int> labels;                  // per face: feature id (the patch labels, rims reassigned)
   std::vector<Feature> features;            // indexed by feature id
@@ -135,6 +131,7 @@ struct FeatureLayer {
   double max_deviation = 0.0;    // largest distance of an input vertex from its nearest feature surface
   double rms_deviation = 0.0;
   double distance_tolerance = 0.0;  // the one used
+  double angle_tolerance_degrees = 5.0;  // the one used (FeatureOptions)
   // The mesh's kind and noise, decided once by the split stage from the typical patch's fit (the
   // lower median of the patches' robust spreads: an exact tessellation fits to a hundredth of the
   // distance tolerance); every later stage and the B-rep read them.

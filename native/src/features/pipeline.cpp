@@ -42,6 +42,7 @@ FeatureState::FeatureState(const TriangleMesh& mesh, const std::vector<int>& lab
       normal_noise(options.normal_floor_degrees * M_PI / 180.0) {
   const double diagonal = bounding_box_diagonal(mesh);
   layer.distance_tolerance = options.distance_tolerance > 0.0 ? options.distance_tolerance : 1e-3 * diagonal;
+  layer.angle_tolerance_degrees = options.angle_tolerance_degrees;
   exact_distance = std::max(kExactFraction * layer.distance_tolerance, 2.0 * floor);
   noise = floor;  // until the split stage measures it
   layer.labels = labels;
