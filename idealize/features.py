@@ -91,8 +91,13 @@ def split_range(progress, share):
     return (start, middle), (middle, end)
 
 
-def idealize(mesh, segmentation=None, progress=None, angle_tolerance=5.0, distance_tolerance=None,
-             radius_tolerance=0.05, idealize_relations=True, self_intersections=False):
+# The defaults of the options a user sets, from the native core (FeatureOptions): no second copy.
+DEFAULTS = native.feature_defaults()
+
+
+def idealize(mesh, segmentation=None, progress=None, angle_tolerance=DEFAULTS["angle_tolerance_degrees"],
+             distance_tolerance=None, radius_tolerance=DEFAULTS["radius_tolerance"],
+             idealize_relations=DEFAULTS["idealize"], self_intersections=False):
     """Segment (unless a segmentation is given), identify and relate features, project the mesh.
 
     The options rarely need changing. angle_tolerance (degrees): directions closer than this are

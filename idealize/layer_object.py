@@ -19,7 +19,7 @@ import os
 
 import numpy as np
 
-from .features import FeatureLayer, idealize
+from .features import DEFAULTS, FeatureLayer, idealize
 from .freecad_mesh import FACE_COLORS, deviation_colors, mesh_from_freecad, patch_colors, type_colors, usable_mesh
 from .mesh import MeshError
 
@@ -28,14 +28,14 @@ COLOR_MODES = ["Type", "Feature", "Deviation"]
 # Options of the layer: (property, type, preference key, default, description). Defaults are the
 # native core's (feature_layer.h); the preferences page writes the preference keys.
 OPTIONS = [
-    ("AngleTolerance", "App::PropertyAngle", "AngleTolerance", 5.0,
+    ("AngleTolerance", "App::PropertyAngle", "AngleTolerance", DEFAULTS["angle_tolerance_degrees"],
      "Directions closer than this are parallel or perpendicular; axes within it of the part's ideal "
      "directions (0/10/30/45/60 deg) snap to them"),
-    ("DistanceTolerance", "App::PropertyDistance", "DistanceTolerance", 0.0,
+    ("DistanceTolerance", "App::PropertyDistance", "DistanceTolerance", DEFAULTS["distance_tolerance"],
      "Axes, centres, radii and offsets closer than this are equal; 0: 0.1 % of the bounding-box diagonal"),
-    ("RadiusTolerance", "App::PropertyPercent", "RadiusTolerancePercent", 5,
+    ("RadiusTolerance", "App::PropertyPercent", "RadiusTolerancePercent", round(100 * DEFAULTS["radius_tolerance"]),
      "Radii within this percentage of each other are one design radius"),
-    ("IdealizeRelations", "App::PropertyBool", "IdealizeRelations", True,
+    ("IdealizeRelations", "App::PropertyBool", "IdealizeRelations", DEFAULTS["idealize"],
      "Make parallel, coaxial, equal-radius ... relations exact and snap axes to ideal directions"),
 ]
 # Property attribute flags (App::PropertyType): Output properties do not touch the object, so

@@ -172,3 +172,42 @@ def test_deviation_colors_scale_and_missing_values():
     assert np.allclose(colors[3], DEVIATION_STOPS[-1])  # clamped above the scale
     assert np.allclose(colors[1], DEVIATION_STOPS[len(DEVIATION_STOPS) // 2])
     assert np.allclose(colors[4], SURFACE_COLORS["freeform"])
+
+
+def test_option_defaults_have_one_source():
+    """The options' defaults come from the native core: the Python API, the document object's
+    options and the task panel (which shows the object's values and holds none of its own). The
+    preference page, a .ui file FreeCAD loads without code, shows its own values until the user
+    saves: they must be the native ones."""
+    import inspect
+    import os
+    import xml.etree.ElementTree as ElementTree
+    import idealize
+    from idealize import layer_object
+    from idealize._loader import native
+    defaults = native.feature_defaults()
+    signature = inspect.signature(idealize.idealize).parameters
+    assert signature["angle_tolerance"].default == defaults["angle_tolerance_degrees"]
+    assert signature["radius_tolerance"].default == defaults["radius_tolerance"]
+    assert signature["idealize_relations"].default == defaults["idealize"]
+    option = {name: default for name, _, _, default, _ in layer_object.OPTIONS}
+    assert option == {"AngleTolerance": defaults["angle_tolerance_degrees"], "DistanceTolerance": defaults["distance_tolerance"],
+                      "RadiusTolerance": round(100 * defaults["radius_tolerance"]), "IdealizeRelations": defaults["idealize"]}
+    ui = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "Resources", "ui")
+    panel = ElementTree.parse(os.path.join(ui, "FeatureLayer.ui"))
+    assert not [p for p in panel.iter("property") if p.get("name") == "value"]
+    shown = {}
+    for widget in ElementTree.parse(os.path.join(ui, "PreferencesIdealize.ui")).iter("widget"):
+        entry = widget.find("property[@name='prefEntry']/cstring")
+        if entry is None:
+            continue
+        value = widget.find("property[@name='value']/double")
+        if value is None:
+            value = widget.find("property[@name='value']/number")
+        checked = widget.find("property[@name='checked']/bool")
+        shown[entry.text] = (float(value.text) if value is not None else
+                             (checked.text == "true") if checked is not None else None)
+    assert shown["AngleTolerance"] == defaults["angle_tolerance_degrees"]
+    assert shown["RadiusTolerancePercent"] == round(100 * defaults["radius_tolerance"])
+    assert shown["IdealizeRelations"] == defaults["idealize"]
+    assert shown.get("DistanceTolerance") in (None, defaults["distance_tolerance"])

@@ -336,6 +336,20 @@ PYBIND11_MODULE(_native, m) {
       "Feature identification, graph and projection (thesis ch. 4); options as FeatureOptions "
       "(distance_tolerance 0: 0.1 % of the bounding-box diagonal).");
 
+  m.def(
+      "feature_defaults",
+      [] {
+        const FeatureOptions o;
+        py::dict d;
+        d["angle_tolerance_degrees"] = o.angle_tolerance_degrees;
+        d["distance_tolerance"] = o.distance_tolerance;
+        d["radius_tolerance"] = o.radius_tolerance;
+        d["idealize"] = o.idealize;
+        return d;
+      },
+      "The defaults of the options a user sets (FeatureOptions, where each says where its value comes "
+      "from): the one source of the Python API's, the document object's and the task panel's.");
+
   py::class_<BrepResult>(m, "Brep", "A fitted B-rep: solid, or the shell of the faces that could be made.")
       .def_readonly("valid", &BrepResult::valid)
       .def_readonly("closed", &BrepResult::closed)
