@@ -56,200 +56,222 @@ bool alike(const Feature& a, const Feature& b, double angle_tolerance, double di
   return a.type == SurfaceType::Plane || equal_radii(a, b, distance_tolerance, radius_tolerance);
 }
 
-bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<PatchPoints>& points,
-                   const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
-                   const FeatureOptions& options, double tolerance, bool exact, double exact_distance, double noise,
-                   std::vector<Feature>& features, std::vector<int>& labels, std::set<std::pair<int, int>>& rejected, const ProgressSpan& progress) {
-  // Adjacent pairs, on an exact tessellation not across a crease: sharper than kLargestFacetTurn, and
-  // than a quarter more than the sharpest turn inside the larger patch, which on the saddle of a
-  // coarse torus exceeds it (the CAD tessellations of the benchmark: up to 54° inside tori, 22°
-  // inside any other face).
-  std::vector<std::pair<int, int>> pairs;
-  const std::map<std::pair<int, int>, double> turns = boundary_turns(mesh, topology, labels, true);
-  auto inside_turn = [&](int p) {
+namespace {
+
+enum class Verdict { kUnchanged, kAbsorbed, kMerged, kRejected };
+
+struct Candidate {
+  double cost;
+  int a, b;
+  Feature feature;
+};
+
+struct Judgement {
+  Verdict verdict = Verdict::kUnchanged;
+  Candidate candidate;  // kAbsorbed: (large, piece); kMerged: the pair and its surface
+};
+
+// One pair of adjacent patches under judgement: the two, which is the larger, and the limits a
+// merge must meet.
+struct Pair {
+  int a, b;
+  const Feature &fa, &fb;
+  const PatchPoints &pa, &pb;
+  bool a_small, b_small, same_type, a_larger;
+  const Feature &larger, &smaller;
+  const PatchPoints &larger_points, &smaller_points;
+  bool larger_small;
+  double limit, normal_limit;
+  bool one_surface = false, one_plane = false;  // alike pieces that meet without a crease (judge)
+  PatchPoints both;                              // the points of the two together
+};
+
+// Judges pairs of adjacent patches, reading the features, points and labels only (so pairs are
+// judged on two threads).
+struct PairJudge {
+  const TriangleMesh& mesh;
+  const MeshTopology& topology;
+  const std::vector<PatchPoints>& points;
+  const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points;
+  const FeatureOptions& options;
+  double tolerance;
+  bool exact;
+  double exact_distance, noise;
+  const std::vector<Feature>& features;
+  const std::vector<int>& labels;
+  const std::map<std::pair<int, int>, double>& turns;  // boundary_turns, with the turns inside
+  double normal_floor, angle_tolerance;                 // radians
+
+  double inside_turn(int p) const {
     const auto it = turns.find({p, p});
     return it == turns.end() ? 0.0 : it->second;
-  };
-  for (const auto& [pair, turn] : turns) {
-    if (pair.first == pair.second) continue;
-    const int larger = points[pair.first].weights.sum() >= points[pair.second].weights.sum() ? pair.first : pair.second;
-    if (!exact || turn <= std::max(kLargestFacetTurn, 1.25 * inside_turn(larger))) pairs.push_back(pair);
   }
 
-  struct Candidate {
-    double cost;
-    int a, b;
-    Feature feature;
-  };
-  std::vector<Candidate> candidates;
-  std::vector<std::pair<int, int>> absorbed;  // (large, piece): the large patch's surface explains the piece
-  const double normal_floor = options.normal_floor_degrees * M_PI / 180.0;
-  const double angle_tolerance = options.angle_tolerance_degrees * M_PI / 180.0;
-  // Each pair is judged on its own (reading the features, points and labels only): on two threads,
-  // the verdicts then taken in the pairs' order.
-  enum class Verdict { kUnchanged, kAbsorbed, kMerged, kRejected };
-  struct Judgement {
-    Verdict verdict = Verdict::kUnchanged;
-    Candidate candidate;  // kAbsorbed: (large, piece); kMerged: the pair and its surface
-  };
-  auto judge = [&](size_t i) -> Judgement {
-    const int a = pairs[i].first, b = pairs[i].second;  // (not a structured binding: lambdas below capture them)
-    if (rejected.count({a, b})) return {};  // neither changed since
-    const Feature &fa = features[a], &fb = features[b];
-    const PatchPoints &pa = points[a], &pb = points[b];
-    const bool a_small = pa.points.rows() < kInteriorPoints, b_small = pb.points.rows() < kInteriorPoints;
-    const bool same_type = fa.type == fb.type && fa.type != SurfaceType::Freeform;
-    const bool a_larger = pa.weights.sum() >= pb.weights.sum();
-    const Feature &larger = a_larger ? fa : fb, &smaller = a_larger ? fb : fa;
-    const PatchPoints &larger_points = a_larger ? pa : pb, &smaller_points = a_larger ? pb : pa;
-    const bool larger_small = a_larger ? a_small : b_small;
-    const double limit = options.residual_ratio * std::max(fa.rms, fb.rms) + kExactFraction * tolerance;
-    const double normal_limit = options.residual_ratio * std::max(fa.normal_rms, fb.normal_rms) + normal_floor;
-    // A surface that the vertices of a large patch fix takes the neighbours it explains as it is,
-    // several in one call: on an exact tessellation when it explains every point and the normals of
-    // both together fit it as a merge would require (the fragments along a coarse torus); on a
-    // noisy one a curved surface takes a large neighbour of another type that it fits about as well
-    // as the neighbour's own surface (a zone of a torus that a sphere fits).
-    const bool noisy_other_type = !exact && !same_type && !a_small && !b_small && larger.type != SurfaceType::Plane;
-    if ((exact || noisy_other_type) && !larger_small && larger.type != SurfaceType::Freeform) {
-      SurfaceFit piece;
-      piece.surface = larger.surface;
-      measure_spreads(smaller_points, piece);
-      bool explained;
-      if (exact) {
-        const double w_larger = larger_points.sample_weights.sum(), w_smaller = smaller_points.sample_weights.sum();
-        const double normal_rms = std::sqrt((w_larger * larger.normal_rms * larger.normal_rms +
-                                             w_smaller * piece.normal_rms * piece.normal_rms) / (w_larger + w_smaller));
-        const double angle = 3.0 * std::max(fa.normal_spread, fb.normal_spread) + normal_floor;
-        explained = normal_rms <= normal_limit &&
-                    explains_every_point(larger.surface, smaller_points, exact_distance, angle, kLargestFacetTurn);
-      } else {
-        double rms, max_error;
-        fit_residuals(larger.surface, smaller_points.points, smaller_points.weights, rms, max_error);
-        explained = rms <= options.residual_ratio * std::max(smaller.rms, noise) && piece.normal_rms <= normal_limit;
-      }
-      if (explained) return {Verdict::kAbsorbed, {0.0, a_larger ? a : b, a_larger ? b : a, Feature()}};
+  // A surface that the vertices of a large patch fix takes the neighbours it explains as it is,
+  // several in one call: on an exact tessellation when it explains every point and the normals of
+  // both together fit it as a merge would require (the fragments along a coarse torus); on a
+  // noisy one a curved surface takes a large neighbour of another type that it fits about as well
+  // as the neighbour's own surface (a zone of a torus that a sphere fits).
+  bool absorbs(const Pair& q) const {
+    const bool noisy_other_type = !exact && !q.same_type && !q.a_small && !q.b_small &&
+                                  q.larger.type != SurfaceType::Plane;
+    if (!(exact || noisy_other_type) || q.larger_small || q.larger.type == SurfaceType::Freeform) return false;
+    SurfaceFit piece;
+    piece.surface = q.larger.surface;
+    measure_spreads(q.smaller_points, piece);
+    if (exact) {
+      const double w_larger = q.larger_points.sample_weights.sum(), w_smaller = q.smaller_points.sample_weights.sum();
+      const double normal_rms = std::sqrt((w_larger * q.larger.normal_rms * q.larger.normal_rms +
+                                           w_smaller * piece.normal_rms * piece.normal_rms) / (w_larger + w_smaller));
+      const double angle = 3.0 * std::max(q.fa.normal_spread, q.fb.normal_spread) + normal_floor;
+      return normal_rms <= q.normal_limit &&
+             explains_every_point(q.larger.surface, q.smaller_points, exact_distance, angle, kLargestFacetTurn);
     }
-    // Two large patches of different types make one surface only on an exact tessellation: a coarse
-    // torus falls into bands between its meridians, each of which a cylinder or cone fits exactly.
-    if (!same_type && !a_small && !b_small && !exact) return {};
-    // On a noisy mesh, two cylinders of one radius whose axes turn may be sectors of another surface
-    // that the histogram cut up: a torus's tube (a wide blend whose mean curvature passes through
-    // zero), a slender cone. Their union is identified afresh.
-    const bool sectors = !exact && same_type && fa.type == SurfaceType::Cylinder &&
-                         std::abs(fa.surface.axis.dot(fb.surface.axis)) < std::cos(angle_tolerance) &&
-                         equal_radii(fa, fb, tolerance, options.radius_tolerance);
-    // Two alike pieces (planes within the angle tolerance; coaxial cylinders of one radius, and so
-    // on) that meet without a crease (no facet turns more across their border than inside either)
-    // are one surface where it explains each part (below), or, planes, where both pass through their
-    // border as closely as through their own points (not a step): a sculpted face's undulation bends
-    // it by more than its pieces' fits allow a merge (a sculpted fillet in two pieces 1.5° apart),
-    // and a large face by more than the distance tolerance (the sculpted box's sides, in two planes
-    // 1° apart), but not by an edge. Idealization would make such planes parallel, and so, sharing a
-    // border, coplanar.
-    const auto border = turns.find({std::min(a, b), std::max(a, b)});
-    const bool one_surface = same_type && alike(fa, fb, angle_tolerance, tolerance, options.radius_tolerance) &&
-                             border != turns.end() && border->second <= std::max(inside_turn(a), inside_turn(b));
-    const bool one_plane = one_surface && fa.type == SurfaceType::Plane;
-    const PatchPoints both = concatenate(pa, pb);
-    auto accepted = [&](const Feature& u) {
-      if (u.type == SurfaceType::Freeform) return false;
-      // (A curved union keeps to the normals' limit: the refit of two pieces of a narrow fillet may
-      // flatten into a cylinder of 20 m, which then grows over the plane beside it.)
-      const bool loose = !exact && one_surface && u.type == fa.type;
-      if ((!loose && u.rms > limit) || (!(loose && one_plane) && u.normal_rms > normal_limit)) return false;
-      if (!exact) {
-        // An RMS over the union hides a small foreign part (a pocket's wall in a large plane, whose
-        // RMS then lets the next one in).
-        for (const auto& [part, own] : {std::pair{&pa, &fa}, std::pair{&pb, &fb}}) {
-          double rms, max_error;
-          fit_residuals(u.surface, part->points, part->weights, rms, max_error);
-          if (rms > options.residual_ratio * std::max(own->rms, noise) + tolerance)
-            return one_plane && u.type == SurfaceType::Plane &&
-                   surfaces_meet_at_border(mesh, topology, labels, a, b, fa.surface, fb.surface,
-                                           std::max(tolerance, fa.max_error), std::max(tolerance, fb.max_error));
-        }
+    double rms, max_error;
+    fit_residuals(q.larger.surface, q.smaller_points.points, q.smaller_points.weights, rms, max_error);
+    return rms <= options.residual_ratio * std::max(q.smaller.rms, noise) && piece.normal_rms <= q.normal_limit;
+  }
+
+  // Whether surface `u` may stand for both patches of the pair.
+  bool accepted(const Pair& q, const Feature& u) const {
+    if (u.type == SurfaceType::Freeform) return false;
+    // (A curved union keeps to the normals' limit: the refit of two pieces of a narrow fillet may
+    // flatten into a cylinder of 20 m, which then grows over the plane beside it.)
+    const bool loose = !exact && q.one_surface && u.type == q.fa.type;
+    if ((!loose && u.rms > q.limit) || (!(loose && q.one_plane) && u.normal_rms > q.normal_limit)) return false;
+    if (!exact) {
+      // An RMS over the union hides a small foreign part (a pocket's wall in a large plane, whose
+      // RMS then lets the next one in).
+      for (const auto& [part, own] : {std::pair{&q.pa, &q.fa}, std::pair{&q.pb, &q.fb}}) {
+        double rms, max_error;
+        fit_residuals(u.surface, part->points, part->weights, rms, max_error);
+        if (rms > options.residual_ratio * std::max(own->rms, noise) + tolerance)
+          return q.one_plane && u.type == SurfaceType::Plane &&
+                 surfaces_meet_at_border(mesh, topology, labels, q.a, q.b, q.fa.surface, q.fb.surface,
+                                         std::max(tolerance, q.fa.max_error), std::max(tolerance, q.fb.max_error));
+      }
+      return true;
+    }
+    // Exact only with a point more than the surface's parameters fit anyway (the six vertices of
+    // two creased quads lie on three lines through a point, and so on a cone).
+    if (distinct_points(q.both) <= parameter_count(u.type)) return false;
+    // As much normal spread as the parts have is allowed, plus the floor (and the facets' chords).
+    const double angle = 3.0 * std::max(q.fa.normal_spread, q.fb.normal_spread) + normal_floor;
+    const double chord_turn = q.larger_small ? kFewPointsChordTurn : kLargestFacetTurn;
+    return explains_every_point(u.surface, q.pa, exact_distance, angle, chord_turn) &&
+           explains_every_point(u.surface, q.pb, exact_distance, angle, chord_turn);
+  }
+
+  // Two pieces identified afresh as one; on an exact tessellation, where identification took a
+  // sphere or a cone for two curved pieces of a lemon-shaped dome (a spindle torus's inner part)
+  // that it does not explain, the torus, if it does, from the piece that is a lemon already if one
+  // is. (Planar facets tell no curvature: the few points of two fit a lemon of any shape.)
+  bool identify_union(const Pair& q, Feature& merged) const {
+    merged = identify_points(q.both, q.larger.curvature);
+    bool ok = accepted(q, merged);
+    auto curved = [](SurfaceType t) { return t != SurfaceType::Plane && t != SurfaceType::Freeform; };
+    auto lemon_piece = [](const Feature& f) { return f.type == SurfaceType::Torus && f.surface.radius < 0.0; };
+    const Surface* start = lemon_piece(q.fa) ? &q.fa.surface : lemon_piece(q.fb) ? &q.fb.surface : nullptr;
+    if (exact && !ok && curved(merged.type) && (merged.type != SurfaceType::Torus || start) && curved(q.fa.type) &&
+        curved(q.fb.type)) {
+      if (const std::optional<SurfaceFit> lemon = fit_lemon(q.both, options.fit, tolerance, exact_distance, start)) {
+        Feature torus = merged;
+        torus.set_fit(*lemon);
+        if ((ok = accepted(q, torus))) merged = torus;
+      }
+    }
+    return ok;
+  }
+
+  // On a noisy mesh, two planes may be the halves of a narrow fillet, each as flat as the noise
+  // lets it look: a curved surface joins them when its normals fit the union better than either
+  // plane's fit its own half (two faces of a real edge fit their planes better), and its
+  // distances no worse. Most pairs of planes are faces of a real edge: only planes that turn by
+  // less than 60° (the halves of a rounded edge of up to 120°) are tried, and the other curved
+  // types only where a cylinder bends the right way but does not fit (measured on the benchmark's
+  // scans: 3 of 1242 pairs merged, all within 40°; fitting them all doubled the merging time).
+  bool curved_halves(const Pair& q, Feature& merged) const {
+    const double plane_normal_rms = std::min(q.fa.normal_rms, q.fb.normal_rms);
+    for (SurfaceType type : {SurfaceType::Cylinder, SurfaceType::Cone, SurfaceType::Sphere, SurfaceType::Torus}) {
+      const SurfaceFit fit = fit_surface(type, q.both, options.fit);
+      if (!fit.valid) continue;
+      Feature curved = q.larger;
+      curved.set_fit(fit);
+      const bool bends = curved.normal_rms < plane_normal_rms;
+      if (bends && curved.rms <= std::max(q.fa.rms, q.fb.rms) && accepted(q, curved)) {
+        merged = curved;
         return true;
       }
-      // Exact only with a point more than the surface's parameters fit anyway (the six vertices of
-      // two creased quads lie on three lines through a point, and so on a cone).
-      if (distinct_points(both) <= parameter_count(u.type)) return false;
-      // As much normal spread as the parts have is allowed, plus the floor (and the facets' chords).
-      const double angle = 3.0 * std::max(fa.normal_spread, fb.normal_spread) + normal_floor;
-      const double chord_turn = larger_small ? kFewPointsChordTurn : kLargestFacetTurn;
-      return explains_every_point(u.surface, pa, exact_distance, angle, chord_turn) &&
-             explains_every_point(u.surface, pb, exact_distance, angle, chord_turn);
-    };
-    // A small piece joins its neighbour's surface; two small pieces may make a new one.
-    Feature merged = larger;
-    bool ok = false;
-    if ((same_type || !larger_small) && larger.type != SurfaceType::Freeform) {
-      const SurfaceFit fit = fit_surface(larger.type, both, options.fit, &larger.surface);
-      if (fit.valid) {
-        merged.set_fit(fit);
-        ok = accepted(merged);
-      }
+      if (type == SurfaceType::Cylinder && !bends) break;
     }
-    // On an exact tessellation, two large pieces of which one is curved may lie on a third surface:
-    // the bands of a coarse torus between its parallels are cones or spheres each.
-    const bool one_curved = exact && (fa.type != SurfaceType::Plane || fb.type != SurfaceType::Plane) &&
-                            fa.type != SurfaceType::Freeform && fb.type != SurfaceType::Freeform;
-    if (!ok && ((a_small && b_small) || one_curved || sectors)) {
-      merged = identify_points(both, larger.curvature);
-      ok = accepted(merged);
-      // Identification accepts the simplest type within the distance tolerance, which on an exact
-      // tessellation may take a sphere or a cone for two curved pieces of a lemon-shaped dome (a
-      // spindle torus's inner part) that it does not explain: then the torus, if it does, from the
-      // piece that is a lemon already if one is. (Planar facets tell no curvature: the few points
-      // of two fit a lemon of any shape.)
-      auto curved = [](SurfaceType t) { return t != SurfaceType::Plane && t != SurfaceType::Freeform; };
-      auto lemon_piece = [](const Feature& f) { return f.type == SurfaceType::Torus && f.surface.radius < 0.0; };
-      const Surface* start = lemon_piece(fa) ? &fa.surface : lemon_piece(fb) ? &fb.surface : nullptr;
-      if (exact && !ok && curved(merged.type) && (merged.type != SurfaceType::Torus || start) && curved(fa.type) &&
-          curved(fb.type)) {
-        if (const std::optional<SurfaceFit> lemon = fit_lemon(both, options.fit, tolerance, exact_distance, start)) {
-          Feature torus = merged;
-          torus.set_fit(*lemon);
-          if ((ok = accepted(torus))) merged = torus;
-        }
-      }
-    }
-    // On a noisy mesh, two planes may be the halves of a narrow fillet, each as flat as the noise
-    // lets it look: a curved surface joins them when its normals fit the union better than either
-    // plane's fit its own half (two faces of a real edge fit their planes better), and its
-    // distances no worse. Most pairs of planes are faces of a real edge: only planes that turn by
-    // less than 60° (the halves of a rounded edge of up to 120°) are tried, and the other curved
-    // types only where a cylinder bends the right way but does not fit (measured on the benchmark's
-    // scans: 3 of 1242 pairs merged, all within 40°; fitting them all doubled the merging time).
-    const bool halves = std::abs(fa.surface.axis.dot(fb.surface.axis)) > 0.5;
-    if (!ok && !exact && same_type && fa.type == SurfaceType::Plane && halves) {
-      const double plane_normal_rms = std::min(fa.normal_rms, fb.normal_rms);
-      for (SurfaceType type : {SurfaceType::Cylinder, SurfaceType::Cone, SurfaceType::Sphere, SurfaceType::Torus}) {
-        const SurfaceFit fit = fit_surface(type, both, options.fit);
-        if (!fit.valid) continue;
-        Feature curved = larger;
-        curved.set_fit(fit);
-        const bool bends = curved.normal_rms < plane_normal_rms;
-        if (bends && curved.rms <= std::max(fa.rms, fb.rms) && accepted(curved)) {
-          merged = curved;
-          ok = true;
-          break;
-        }
-        if (type == SurfaceType::Cylinder && !bends) break;
-      }
-    }
-    if (!ok) return {Verdict::kRejected, {0.0, a, b, Feature()}};
-    return {Verdict::kMerged, {merged.rms / limit, a, b, merged}};
-  };
-  std::vector<Judgement> judgements(pairs.size());
-  std::vector<int> order(pairs.size());
-  std::iota(order.begin(), order.end(), 0);
-  on_two_threads(order, [&](int i) { judgements[i] = judge(i); }, progress);
-  for (Judgement& j : judgements) {
-    if (j.verdict == Verdict::kAbsorbed) absorbed.push_back({j.candidate.a, j.candidate.b});
-    if (j.verdict == Verdict::kMerged) candidates.push_back(std::move(j.candidate));
-    if (j.verdict == Verdict::kRejected) rejected.insert({j.candidate.a, j.candidate.b});
+    return false;
   }
+
+  Judgement judge(int a, int b, const std::set<std::pair<int, int>>& rejected) const;
+};
+
+Judgement PairJudge::judge(int a, int b, const std::set<std::pair<int, int>>& rejected) const {
+  if (rejected.count({a, b})) return {};  // neither changed since
+  const Feature &fa = features[a], &fb = features[b];
+  const PatchPoints &pa = points[a], &pb = points[b];
+  const bool a_larger = pa.weights.sum() >= pb.weights.sum();
+  const bool a_small = pa.points.rows() < kInteriorPoints, b_small = pb.points.rows() < kInteriorPoints;
+  Pair q{a, b, fa, fb, pa, pb, a_small, b_small,
+         fa.type == fb.type && fa.type != SurfaceType::Freeform, a_larger,
+         a_larger ? fa : fb, a_larger ? fb : fa, a_larger ? pa : pb, a_larger ? pb : pa,
+         a_larger ? a_small : b_small,
+         options.residual_ratio * std::max(fa.rms, fb.rms) + kExactFraction * tolerance,
+         options.residual_ratio * std::max(fa.normal_rms, fb.normal_rms) + normal_floor, false, false, {}};
+  if (absorbs(q)) return {Verdict::kAbsorbed, {0.0, a_larger ? a : b, a_larger ? b : a, Feature()}};
+  // Two large patches of different types make one surface only on an exact tessellation: a coarse
+  // torus falls into bands between its meridians, each of which a cylinder or cone fits exactly.
+  if (!q.same_type && !a_small && !b_small && !exact) return {};
+  // On a noisy mesh, two cylinders of one radius whose axes turn may be sectors of another surface
+  // that the histogram cut up: a torus's tube (a wide blend whose mean curvature passes through
+  // zero), a slender cone. Their union is identified afresh.
+  const bool sectors = !exact && q.same_type && fa.type == SurfaceType::Cylinder &&
+                       std::abs(fa.surface.axis.dot(fb.surface.axis)) < std::cos(angle_tolerance) &&
+                       equal_radii(fa, fb, tolerance, options.radius_tolerance);
+  // Two alike pieces (planes within the angle tolerance; coaxial cylinders of one radius, and so
+  // on) that meet without a crease (no facet turns more across their border than inside either)
+  // are one surface where it explains each part (accepted), or, planes, where both pass through
+  // their border as closely as through their own points (not a step): a sculpted face's undulation
+  // bends it by more than its pieces' fits allow a merge (a sculpted fillet in two pieces 1.5°
+  // apart), and a large face by more than the distance tolerance (the sculpted box's sides, in two
+  // planes 1° apart), but not by an edge. Idealization would make such planes parallel, and so,
+  // sharing a border, coplanar.
+  const auto border = turns.find({std::min(a, b), std::max(a, b)});
+  q.one_surface = q.same_type && alike(fa, fb, angle_tolerance, tolerance, options.radius_tolerance) &&
+                  border != turns.end() && border->second <= std::max(inside_turn(a), inside_turn(b));
+  q.one_plane = q.one_surface && fa.type == SurfaceType::Plane;
+  q.both = concatenate(pa, pb);
+  // A small piece joins its neighbour's surface; two small pieces may make a new one.
+  Feature merged = q.larger;
+  bool ok = false;
+  if ((q.same_type || !q.larger_small) && q.larger.type != SurfaceType::Freeform) {
+    const SurfaceFit fit = fit_surface(q.larger.type, q.both, options.fit, &q.larger.surface);
+    if (fit.valid) {
+      merged.set_fit(fit);
+      ok = accepted(q, merged);
+    }
+  }
+  // On an exact tessellation, two large pieces of which one is curved may lie on a third surface:
+  // the bands of a coarse torus between its parallels are cones or spheres each.
+  const bool one_curved = exact && (fa.type != SurfaceType::Plane || fb.type != SurfaceType::Plane) &&
+                          fa.type != SurfaceType::Freeform && fb.type != SurfaceType::Freeform;
+  if (!ok && ((a_small && b_small) || one_curved || sectors)) ok = identify_union(q, merged);
+  const bool halves = std::abs(fa.surface.axis.dot(fb.surface.axis)) > 0.5;
+  if (!ok && !exact && q.same_type && fa.type == SurfaceType::Plane && halves) ok = curved_halves(q, merged);
+  if (!ok) return {Verdict::kRejected, {0.0, a, b, Feature()}};
+  return {Verdict::kMerged, {merged.rms / q.limit, a, b, merged}};
+}
+
+// Applies the verdicts: absorbed pieces first, into the largest patches first (a patch that
+// absorbs keeps its surface for this call, refitted to all it took), then the merges, cheapest
+// first, each patch in one at most. Returns whether any patch changed.
+bool apply_verdicts(const std::vector<PatchPoints>& points, const FeatureOptions& options, double exact_distance,
+                    std::vector<std::pair<int, int>>& absorbed, std::vector<Candidate>& candidates,
+                    std::vector<Feature>& features, std::vector<int>& labels, std::set<std::pair<int, int>>& rejected) {
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
     return x.cost != y.cost ? x.cost < y.cost : std::make_pair(x.a, x.b) < std::make_pair(y.a, y.b);
   });
@@ -257,8 +279,6 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
   std::vector<int> into(features.size());
   for (size_t p = 0; p < into.size(); ++p) into[p] = static_cast<int>(p);
   bool any = false;
-  // Absorbed pieces first, into the largest patches first; a patch that absorbs keeps its surface
-  // for this call (no merge with a refit).
   std::sort(absorbed.begin(), absorbed.end(), [&](const auto& x, const auto& y) {
     const double wx = points[x.first].weights.sum(), wy = points[y.first].weights.sum();
     return wx != wy ? wx > wy : x < y;
@@ -298,6 +318,43 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
   for (auto it = rejected.begin(); it != rejected.end();)  // pairs with a grown patch are open again
     it = merged[it->first] || merged[it->second] ? rejected.erase(it) : std::next(it);
   return any;
+}
+
+}  // namespace
+
+bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<PatchPoints>& points,
+                   const std::function<Feature(const PatchPoints&, const PatchCurvature&)>& identify_points,
+                   const FeatureOptions& options, double tolerance, bool exact, double exact_distance, double noise,
+                   std::vector<Feature>& features, std::vector<int>& labels, std::set<std::pair<int, int>>& rejected,
+                   const ProgressSpan& progress) {
+  const std::map<std::pair<int, int>, double> turns = boundary_turns(mesh, topology, labels, true);
+  const PairJudge judge{mesh, topology, points, identify_points, options, tolerance, exact, exact_distance, noise,
+                        features, labels, turns, options.normal_floor_degrees * M_PI / 180.0,
+                        options.angle_tolerance_degrees * M_PI / 180.0};
+  // Adjacent pairs, on an exact tessellation not across a crease: sharper than kLargestFacetTurn, and
+  // than a quarter more than the sharpest turn inside the larger patch, which on the saddle of a
+  // coarse torus exceeds it (the CAD tessellations of the benchmark: up to 54° inside tori, 22°
+  // inside any other face).
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& [pair, turn] : turns) {
+    if (pair.first == pair.second) continue;
+    const int larger = points[pair.first].weights.sum() >= points[pair.second].weights.sum() ? pair.first : pair.second;
+    if (!exact || turn <= std::max(kLargestFacetTurn, 1.25 * judge.inside_turn(larger))) pairs.push_back(pair);
+  }
+  // Each pair is judged on its own: on two threads, the verdicts then taken in the pairs' order.
+  std::vector<Judgement> judgements(pairs.size());
+  std::vector<int> order(pairs.size());
+  std::iota(order.begin(), order.end(), 0);
+  on_two_threads(order, [&](int i) { judgements[i] = judge.judge(pairs[i].first, pairs[i].second, rejected); },
+                 progress);
+  std::vector<Candidate> candidates;
+  std::vector<std::pair<int, int>> absorbed;  // (large, piece): the large patch's surface explains the piece
+  for (Judgement& j : judgements) {
+    if (j.verdict == Verdict::kAbsorbed) absorbed.push_back({j.candidate.a, j.candidate.b});
+    if (j.verdict == Verdict::kMerged) candidates.push_back(std::move(j.candidate));
+    if (j.verdict == Verdict::kRejected) rejected.insert({j.candidate.a, j.candidate.b});
+  }
+  return apply_verdicts(points, options, exact_distance, absorbed, candidates, features, labels, rejected);
 }
 
 // Merges patches that one surface fits together, pass by pass until none merges. On an exact

@@ -158,45 +158,70 @@ double bend(const Surface& surface, const FitData& data) {
 
 }  // namespace
 
-int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
-                        double normal_noise, double fits_below, int min_region_faces,
-                        const std::function<Feature(const PatchPoints&)>& identify_points, const FitOptions& fit_options,
-                        std::vector<int>& labels, int next_id, std::map<int, Surface>& generalized,
-                        const ProgressSpan& progress) {
-  // Depth of every face of the patch: edge steps from its rim (multi-source breadth-first search).
-  std::vector<int> depth(mesh.num_faces(), -1), queue, faces;
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    if (labels[f] != patch) continue;
-    faces.push_back(f);
-    for (int c = 0; c < 3; ++c) {
-      const int g = topology.face_neighbor(f, c);
-      if (g < 0 || labels[g] != patch) {
-        depth[f] = 0;
-        queue.push_back(f);
-        break;
-      }
-    }
-  }
-  for (size_t head = 0; head < queue.size(); ++head)
-    for (int c = 0; c < 3; ++c) {
-      const int g = topology.face_neighbor(queue[head], c);
-      if (g >= 0 && labels[g] == patch && depth[g] < 0) {
-        depth[g] = depth[queue[head]] + 1;
-        queue.push_back(g);
-      }
-    }
-  std::vector<int> seeds = queue;  // deepest first, ties by face index
-  std::stable_sort(seeds.begin(), seeds.end(), [&](int x, int y) { return depth[x] != depth[y] ? depth[x] > depth[y] : x < y; });
+namespace {
 
-  const int disc_faces = 2 * kInteriorPoints;
-  const int first_id = next_id;
-  std::vector<char> tried(mesh.num_faces(), 0), in_region(mesh.num_faces(), 0);
-  std::vector<int> slot(mesh.num_vertices(), -1);
-  auto all_points = [&](const std::vector<int>& region_faces) {
+// A region grown in a patch as a surface of another type than its disc's (a torus).
+struct Grown {
+  int id;
+  std::vector<int> faces;
+  Feature feature;
+};
+
+// What the passes of split_into_surfaces share: the patch, the thresholds, the labels being
+// written, and per-face scratch.
+struct SurfaceGrower {
+  const TriangleMesh& mesh;
+  const MeshTopology& topology;
+  const int patch;
+  const double noise, normal_noise, fits_below;
+  const int min_region_faces;
+  const std::function<Feature(const PatchPoints&)>& identify_points;
+  const FitOptions& fit_options;
+  std::vector<int>& labels;
+  int next_id;
+  const ProgressSpan& progress;
+
+  std::vector<int> faces;  // of the patch
+  std::vector<int> seeds;  // its faces, deepest (most edge steps from its rim) first, ties by index
+  std::vector<char> tried, in_region;
+  std::vector<int> slot;
+  long long visited = 0;
+  std::vector<Grown> tori;  // the regions that grew on as tori
+
+  // The faces of the patch and the seeds (multi-source breadth-first search from its rim).
+  void order_seeds() {
+    std::vector<int> depth(mesh.num_faces(), -1), queue;
+    for (int f = 0; f < mesh.num_faces(); ++f) {
+      if (labels[f] != patch) continue;
+      faces.push_back(f);
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(f, c);
+        if (g < 0 || labels[g] != patch) {
+          depth[f] = 0;
+          queue.push_back(f);
+          break;
+        }
+      }
+    }
+    for (size_t head = 0; head < queue.size(); ++head)
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(queue[head], c);
+        if (g >= 0 && labels[g] == patch && depth[g] < 0) {
+          depth[g] = depth[queue[head]] + 1;
+          queue.push_back(g);
+        }
+      }
+    seeds = queue;
+    std::stable_sort(seeds.begin(), seeds.end(),
+                     [&](int x, int y) { return depth[x] != depth[y] ? depth[x] > depth[y] : x < y; });
+  }
+
+  FitData all_points(const std::vector<int>& region_faces) {
     return face_points(mesh, region_faces.data(), static_cast<int>(region_faces.size()), slot, [](int) { return false; });
-  };
+  }
+
   // The disc: the nearest `size` faces of the patch from `seed` that no region took.
-  auto disc = [&](int seed, int size) {
+  std::vector<int> disc(int seed, int size) {
     std::vector<int> region{seed};
     in_region[seed] = 1;
     for (size_t head = 0; head < region.size() && static_cast<int>(region.size()) < size; ++head)
@@ -209,174 +234,207 @@ int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, 
       }
     for (int f : region) in_region[f] = 0;
     return region;
-  };
-  auto fits = [&](const Feature& f) { return f.type != SurfaceType::Freeform && f.rms <= fits_below; };
-  long long visited = 0;
-  struct Grown {
-    int id;
-    std::vector<int> faces;
+  }
+
+  bool fits(const Feature& f) const { return f.type != SurfaceType::Freeform && f.rms <= fits_below; }
+
+  void grow(std::vector<int> region, Feature feature, SurfaceType disc_type);
+  void seed_pass();
+};
+
+// One region growing from its disc as a surface.
+struct Growth {
+  SurfaceGrower& g;
+  std::vector<int>& region;
+  Feature& feature;
+  size_t fitted;
+  double disc_rms = 0.0;
+  Feature fitting;
+  size_t fitting_size = 0;
+  bool overgrown = false;
+
+  bool explains(int f) const {
+    return face_misfit(g.mesh, f, feature.surface, 3.0 * std::max(g.noise, feature.spread),
+                       3.0 * std::max(g.normal_noise, feature.normal_spread)) <= 1.0;
+  }
+
+  // A refit that no longer fits (the region crept over a neighbouring surface that it explains
+  // near their tangent border, and the refit bent towards it) ends growth at the last region
+  // that fitted.
+  void refit() {
+    const SurfaceFit fit = fit_surface(feature.type, g.all_points(region), g.fit_options, &feature.surface);
+    if (fit.valid) feature.set_fit(fit);
+    fitted = region.size();
+    overgrown = !g.fits(feature) && feature.rms > disc_rms + g.noise;
+    if (overgrown) return;
+    fitting = feature;
+    fitting_size = region.size();
+  }
+
+  // A cylinder grown on a sector of a tube's bend (a torus whose tube it approximates, the
+  // histogram having cut the bend up) stops, or overgrows, where the bend turns away from it.
+  // Where the region together with as many faces again beyond it fits no cylinder as well as its
+  // disc did, but a ring torus bending across the cylinder's axis (not a barrel about it) does, it
+  // grows on as that torus.
+  bool generalize() {
+    if (feature.type != SurfaceType::Cylinder) return false;
+    std::vector<int> wider = region;
+    for (size_t head = 0; head < wider.size() && wider.size() < 2 * region.size(); ++head)
+      for (int c = 0; c < 3; ++c) {
+        const int n = g.topology.face_neighbor(wider[head], c);
+        if (n >= 0 && g.labels[n] == g.patch && !g.in_region[n]) {
+          g.in_region[n] = 1;
+          wider.push_back(n);
+        }
+      }
+    for (size_t i = region.size(); i < wider.size(); ++i) g.in_region[wider[i]] = 0;
+    const FitData wider_points = g.all_points(wider);
+    const double as_well = std::min(g.fits_below, disc_rms + g.noise);
+    const SurfaceFit straight = fit_surface(SurfaceType::Cylinder, wider_points, g.fit_options, &feature.surface);
+    if (straight.valid && straight.rms <= disc_rms + g.noise) return false;
+    // Or a cone where it fits better than the torus: a cylinder grown on a slender cone tilts by
+    // the half-angle and takes half of it, its axis along the cone's generators there (turned from
+    // the cone's by up to twice the half-angle and 45°, not across a tube's bend that a flat cone fits).
+    const SurfaceFit torus = fit_surface(SurfaceType::Torus, wider_points, g.fit_options);
+    const SurfaceFit cone = fit_surface(SurfaceType::Cone, wider_points, g.fit_options);
+    const bool torus_fits = torus.valid && torus.rms <= as_well && torus.surface.radius >= torus.surface.minor &&
+                            std::abs(torus.surface.axis.dot(feature.surface.axis)) <= std::sqrt(0.5);
+    const bool cone_fits = cone.valid && cone.rms <= as_well &&
+                           std::abs(cone.surface.axis.dot(feature.surface.axis)) >=
+                               std::max(std::sqrt(0.5), std::cos(2.0 * cone.surface.half_angle));
+    if (!torus_fits && !cone_fits) return false;
+    const SurfaceFit& bent = cone_fits && (!torus_fits || cone.rms < torus.rms) ? cone : torus;
+    feature.set_fit(bent);
+    fitting = feature;
+    fitted = fitting_size = region.size();
+    overgrown = false;
+    return true;
+  }
+};
+
+// Grows `region` (faces of the patch) as `feature`, fitted to a disc as a `disc_type`.
+void SurfaceGrower::grow(std::vector<int> region, Feature feature, SurfaceType disc_type) {
+  for (int f : region) tried[f] = in_region[f] = 1;
+  Growth growth{*this, region, feature, region.size(), 0.0, Feature(), 0, false};
+  // The disc's faces that the surface does not explain leave it; the rest grows.
+  for (int f : region) in_region[f] = growth.explains(f);
+  region.erase(std::remove_if(region.begin(), region.end(), [&](int f) { return !in_region[f]; }), region.end());
+  growth.disc_rms = feature.rms;
+  growth.fitting = feature;
+  growth.fitting_size = region.size();
+  // When growth stops, the surface refitted to all it took may explain more (a disc across a
+  // narrow fillet fixes its radius only roughly): growth resumes while refits add to it.
+  for (bool growing = true; growing;) {
+    for (size_t head = 0; head < region.size() && !growth.overgrown; ++head) {
+      progress.poll(++visited, 1 << 12);
+      for (int c = 0; c < 3 && !growth.overgrown; ++c) {
+        const int g = topology.face_neighbor(region[head], c);
+        if (g < 0 || labels[g] != patch || in_region[g] || !growth.explains(g)) continue;
+        in_region[g] = 1;
+        region.push_back(g);
+        if (region.size() >= 2 * growth.fitted) growth.refit();  // refit as the region doubles
+      }
+    }
+    if (!growth.overgrown && region.size() > growth.fitted + growth.fitted / 8) {  // (bounded rounds: each grows it by an eighth)
+      growth.refit();
+      continue;
+    }
+    growing = growth.generalize();
+  }
+  if (growth.overgrown) {  // (breadth-first: the first faces of the region are connected)
+    for (size_t i = growth.fitting_size; i < region.size(); ++i) in_region[region[i]] = 0;
+    region.resize(growth.fitting_size);
+    feature = growth.fitting;
+  }
+  for (int f : region) in_region[f] = 0;
+  if (static_cast<int>(region.size()) < min_region_faces) return;
+  for (int f : region) labels[f] = next_id;
+  if (feature.type != disc_type) tori.push_back({next_id, region, feature});
+  ++next_id;
+}
+
+// Grows a surface from every seed that no region took and whose disc one surface fits.
+void SurfaceGrower::seed_pass() {
+  const int disc_faces = 2 * kInteriorPoints;
+  for (int seed : seeds) {
+    if (labels[seed] != patch || tried[seed]) continue;
+    std::vector<int> region = disc(seed, disc_faces);
+    const FitData disc_points = all_points(region);
     Feature feature;
-  };
-  std::vector<Grown> tori;  // the regions that grew on as tori
-  // Grows `region` (faces of the patch) as `feature`, fitted to a disc as a `disc_type`.
-  auto grow = [&](std::vector<int> region, Feature feature, SurfaceType disc_type) {
-    for (int f : region) tried[f] = in_region[f] = 1;
-    size_t fitted = region.size();
-    auto explains = [&](int g) {
-      return face_misfit(mesh, g, feature.surface, 3.0 * std::max(noise, feature.spread),
-                         3.0 * std::max(normal_noise, feature.normal_spread)) <= 1.0;
-    };
-    // The disc's faces that the surface does not explain leave it; the rest grows.
-    for (int f : region) in_region[f] = explains(f);
-    region.erase(std::remove_if(region.begin(), region.end(), [&](int f) { return !in_region[f]; }), region.end());
-    // A refit that no longer fits (the region crept over a neighbouring surface that it explains
-    // near their tangent border, and the refit bent towards it) ends growth at the last region
-    // that fitted.
-    const double disc_rms = feature.rms;
-    Feature fitting = feature;
-    size_t fitting_size = region.size();
-    bool overgrown = false;
-    auto refit = [&] {
-      const SurfaceFit fit = fit_surface(feature.type, all_points(region), fit_options, &feature.surface);
-      if (fit.valid) feature.set_fit(fit);
-      fitted = region.size();
-      overgrown = !fits(feature) && feature.rms > disc_rms + noise;
-      if (overgrown) return;
-      fitting = feature;
-      fitting_size = region.size();
-    };
-    // A cylinder grown on a sector of a tube's bend (a torus whose tube it approximates, the
-    // histogram having cut the bend up) stops, or overgrows, where the bend turns away from it.
-    // Where the region together with as many faces again beyond it fits no cylinder as well as its
-    // disc did, but a ring torus bending across the cylinder's axis (not a barrel about it) does, it
-    // grows on as that torus.
-    auto generalize = [&] {
-      if (feature.type != SurfaceType::Cylinder) return false;
-      std::vector<int> wider = region;
-      for (size_t head = 0; head < wider.size() && wider.size() < 2 * region.size(); ++head)
-        for (int c = 0; c < 3; ++c) {
-          const int g = topology.face_neighbor(wider[head], c);
-          if (g >= 0 && labels[g] == patch && !in_region[g]) {
-            in_region[g] = 1;
-            wider.push_back(g);
-          }
-        }
-      for (size_t i = region.size(); i < wider.size(); ++i) in_region[wider[i]] = 0;
-      const FitData wider_points = all_points(wider);
-      const double as_well = std::min(fits_below, disc_rms + noise);
-      const SurfaceFit straight = fit_surface(SurfaceType::Cylinder, wider_points, fit_options, &feature.surface);
-      if (straight.valid && straight.rms <= disc_rms + noise) return false;
-      // Or a cone where it fits better than the torus: a cylinder grown on a slender cone tilts by
-      // the half-angle and takes half of it, its axis along the cone's generators there (turned from
-      // the cone's by up to twice the half-angle and 45°, not across a tube's bend that a flat cone fits).
-      const SurfaceFit torus = fit_surface(SurfaceType::Torus, wider_points, fit_options);
-      const SurfaceFit cone = fit_surface(SurfaceType::Cone, wider_points, fit_options);
-      const bool torus_fits = torus.valid && torus.rms <= as_well && torus.surface.radius >= torus.surface.minor &&
-                              std::abs(torus.surface.axis.dot(feature.surface.axis)) <= std::sqrt(0.5);
-      const bool cone_fits = cone.valid && cone.rms <= as_well &&
-                             std::abs(cone.surface.axis.dot(feature.surface.axis)) >=
-                                 std::max(std::sqrt(0.5), std::cos(2.0 * cone.surface.half_angle));
-      if (!torus_fits && !cone_fits) return false;
-      const SurfaceFit& bent = cone_fits && (!torus_fits || cone.rms < torus.rms) ? cone : torus;
-      feature.set_fit(bent);
-      fitting = feature;
-      fitted = fitting_size = region.size();
-      overgrown = false;
-      return true;
-    };
-    // When growth stops, the surface refitted to all it took may explain more (a disc across a
-    // narrow fillet fixes its radius only roughly): growth resumes while refits add to it.
-    for (bool growing = true; growing;) {
-      for (size_t head = 0; head < region.size() && !overgrown; ++head) {
-        progress.poll(++visited, 1 << 12);
-        for (int c = 0; c < 3 && !overgrown; ++c) {
-          const int g = topology.face_neighbor(region[head], c);
-          if (g < 0 || labels[g] != patch || in_region[g] || !explains(g)) continue;
-          in_region[g] = 1;
-          region.push_back(g);
-          if (region.size() >= 2 * fitted) refit();  // refit as the region doubles
-        }
-      }
-      if (!overgrown && region.size() > fitted + fitted / 8) {  // (bounded rounds: each grows it by an eighth)
-        refit();
-        continue;
-      }
-      growing = generalize();
+    if (static_cast<int>(region.size()) == disc_faces) feature = identify_points(disc_points);
+    if (static_cast<int>(region.size()) < disc_faces || !fits(feature)) {
+      for (int f : region) tried[f] = 1;
+      continue;
     }
-    if (overgrown) {  // (breadth-first: the first faces of the region are connected)
-      for (size_t i = fitting_size; i < region.size(); ++i) in_region[region[i]] = 0;
-      region.resize(fitting_size);
-      feature = fitting;
+    // Across a disc on a narrow fillet the surface may bend by less than the noise: the fit is then
+    // any surface of little curvature (a cylinder of a hundred times the radius, which grows along
+    // the fillet as a flat strip). A larger disc replaces it if its surface fits it and bends by
+    // more than the noise; the disc doubles while it still fits.
+    const bool flat = bend(feature.surface, disc_points) < noise;
+    for (int size = 2 * disc_faces; flat && size <= static_cast<int>(faces.size()); size *= 2) {
+      std::vector<int> larger = disc(seed, size);
+      const FitData larger_points = all_points(larger);
+      const Feature wider = identify_points(larger_points);
+      if (!fits(wider) || wider.rms > std::max(feature.rms, noise)) break;  // it reached another surface
+      if (bend(wider.surface, larger_points) < noise) continue;
+      region = std::move(larger);
+      feature = wider;
+      break;
     }
-    for (int f : region) in_region[f] = 0;
-    if (static_cast<int>(region.size()) < min_region_faces) return;
-    for (int f : region) labels[f] = next_id;
-    if (feature.type != disc_type) tori.push_back({next_id, region, feature});
-    ++next_id;
-  };
+    grow(std::move(region), feature, feature.type);
+  }
+}
+
+}  // namespace
+
+int split_into_surfaces(const TriangleMesh& mesh, const MeshTopology& topology, int patch, double noise,
+                        double normal_noise, double fits_below, int min_region_faces,
+                        const std::function<Feature(const PatchPoints&)>& identify_points, const FitOptions& fit_options,
+                        std::vector<int>& labels, int next_id, std::map<int, Surface>& generalized,
+                        const ProgressSpan& progress) {
+  SurfaceGrower g{mesh, topology, patch, noise, normal_noise, fits_below, min_region_faces, identify_points,
+                  fit_options, labels, next_id, progress, {}, {}, std::vector<char>(mesh.num_faces(), 0),
+                  std::vector<char>(mesh.num_faces(), 0), std::vector<int>(mesh.num_vertices(), -1), 0, {}};
+  g.order_seeds();
+  const int first_id = next_id;
   // A torus found late grows over what the cylinders grown before it left: once one did, the
   // patch is split again with the tori first.
   std::vector<int> first_labels;  // of the faces, after the first pass
   std::vector<Grown> first_tori;
-  int first_next = next_id;
+  int first_next = g.next_id;
   for (int pass = 0; pass < 2; ++pass) {
     if (pass == 1) {
-      if (tori.empty()) break;
-      first_next = next_id;
-      first_tori = std::move(tori);
-      tori.clear();
-      for (int f : faces) {
+      if (g.tori.empty()) break;
+      first_next = g.next_id;
+      first_tori = std::move(g.tori);
+      g.tori.clear();
+      for (int f : g.faces) {
         first_labels.push_back(labels[f]);
         labels[f] = patch;
       }
-      std::fill(tried.begin(), tried.end(), 0);
-      next_id = first_id;
-      for (const Grown& torus : first_tori) grow(torus.faces, torus.feature, SurfaceType::Cylinder);
+      std::fill(g.tried.begin(), g.tried.end(), 0);
+      g.next_id = first_id;
+      for (const Grown& torus : first_tori) g.grow(torus.faces, torus.feature, SurfaceType::Cylinder);
     }
-    for (int seed : seeds) {
-      if (labels[seed] != patch || tried[seed]) continue;
-      std::vector<int> region = disc(seed, disc_faces);
-      const FitData disc_points = all_points(region);
-      Feature feature;
-      if (static_cast<int>(region.size()) == disc_faces) feature = identify_points(disc_points);
-      if (static_cast<int>(region.size()) < disc_faces || !fits(feature)) {
-        for (int f : region) tried[f] = 1;
-        continue;
-      }
-      // Across a disc on a narrow fillet the surface may bend by less than the noise: the fit is then
-      // any surface of little curvature (a cylinder of a hundred times the radius, which grows along
-      // the fillet as a flat strip). A larger disc replaces it if its surface fits it and bends by
-      // more than the noise; the disc doubles while it still fits.
-      const bool flat = bend(feature.surface, disc_points) < noise;
-      for (int size = 2 * disc_faces; flat && size <= static_cast<int>(faces.size()); size *= 2) {
-        std::vector<int> larger = disc(seed, size);
-        const FitData larger_points = all_points(larger);
-        const Feature wider = identify_points(larger_points);
-        if (!fits(wider) || wider.rms > std::max(feature.rms, noise)) break;  // it reached another surface
-        if (bend(wider.surface, larger_points) < noise) continue;
-        region = std::move(larger);
-        feature = wider;
-        break;
-      }
-      grow(std::move(region), feature, feature.type);
-    }
+    g.seed_pass();
   }
+  const std::vector<int>& faces = g.faces;
   if (!first_labels.empty()) {
     // The second pass stands where it explains the patch with no more regions and leaves no more of
     // its faces to the remainder (a round's torus grown first takes the sectors that cylinders had
     // cut off the plane beside it).
     auto left = [&] { return std::count_if(faces.begin(), faces.end(), [&](int f) { return labels[f] == patch; }); };
-    if (next_id > first_next || left() > std::count(first_labels.begin(), first_labels.end(), patch)) {
+    if (g.next_id > first_next || left() > std::count(first_labels.begin(), first_labels.end(), patch)) {
       for (size_t i = 0; i < faces.size(); ++i) labels[faces[i]] = first_labels[i];
-      tori = std::move(first_tori);
-      next_id = first_next;
+      g.tori = std::move(first_tori);
+      g.next_id = first_next;
     }
   }
-  for (const Grown& torus : tori) generalized[torus.id] = torus.feature.surface;
-  if (next_id == first_id) return next_id;  // nothing split off: the patch stays whole
+  for (const Grown& torus : g.tori) generalized[torus.id] = torus.feature.surface;
+  if (g.next_id == first_id) return g.next_id;  // nothing split off: the patch stays whole
   std::vector<char> state(mesh.num_faces(), kOutside);
   for (int f : faces) state[f] = labels[f] == patch ? kUnvisited : kKept;
-  return label_remainder(topology, faces, patch, true, state, labels, next_id, progress);
+  return label_remainder(topology, faces, patch, true, state, labels, g.next_id, progress);
 }
 
 void undo_inexact_splits(const TriangleMesh& mesh, const Eigen::VectorXd& area, const std::vector<int>& original,
