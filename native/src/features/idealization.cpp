@@ -368,16 +368,18 @@ void refit_related_tori(std::vector<Feature>& features, const std::vector<Featur
   }
 }
 
-}  // namespace
+// The area of a group of features.
+double group_area(const std::vector<int>& group, const std::vector<Feature>& features) {
+  double area = 0.0;
+  for (int m : group) area += features[m].area;
+  return area;
+}
 
-int idealize_features(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
-                      const IdealizationOptions& options) {
-  const std::vector<Feature> before = features;
-  const double angle = options.angle_tolerance_degrees * M_PI / 180.0;
-  const double cos_tolerance = std::cos(angle);
-
-  // 1. Directions: parallel groups share their mean direction, then every direction snaps to the
-  // part's ideal directions; those that must stay as fitted (options.unsnapped) do neither.
+// 1. Directions: parallel groups share their mean direction, then every direction snaps to the
+// part's ideal directions (returned; none without a frame); those that must stay as fitted
+// (options.unsnapped) do neither.
+std::vector<Eigen::Vector3d> align_directions(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
+                                              const IdealizationOptions& options, double angle, double cos_tolerance) {
   std::vector<char> unsnapped(features.size(), 0);
   for (int id : options.unsnapped)
     if (id >= 0 && id < static_cast<int>(features.size())) unsnapped[id] = 1;
@@ -398,15 +400,15 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       if (analytic(f) && f.surface.has_direction() && !unsnapped[f.id])
         f.surface.axis = snapped(f.surface.axis, ideals, cos_tolerance);
   }
+  return ideals;
+}
 
-  auto group_area = [&](const std::vector<int>& group) {
-    double area = 0.0;
-    for (int m : group) area += features[m].area;
-    return area;
-  };
+// 2. Coplanar groups take one offset along the shared normal; 3. coaxial groups one axis line,
+// their members keeping their place along it.
+void share_planes_and_axes(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations) {
   for (const FeatureRelation& r : relations) {
     const std::vector<int>& group = r.features;
-    const double area = group_area(group);
+    const double area = group_area(group, features);
     if (!(area > 0.0)) continue;
     if (r.kind == "coplanar") {  // 2. one offset along the shared normal
       const Eigen::Vector3d n = features[largest(group, features)].surface.axis;
@@ -431,7 +433,10 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       }
     }
   }
+}
 
+void refit_moved_profiles(std::vector<Feature>& features, const std::vector<Feature>& before,
+                          const IdealizationOptions& options) {
   // 4. Profiles: a cylinder or cone whose axis moved is fitted again about its ideal axis (the
   // radius of a cylinder, apex and half-angle of a cone), where that fits its points.
   if (options.points && options.refit_moved_profiles)
@@ -445,12 +450,13 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       const SurfaceFit profile = fit_about_axis(f.type, data, f.surface.point, f.surface.axis);
       if (profile.valid && profile.surface.axis.dot(f.surface.axis) > 0.0) f.surface = profile.surface;
     }
+}
 
-  if (options.points) one_cone_per_surface(features, relations, *options.points, ideals, angle, options.residual_ratio);
-
+// 5. Equal-radius groups take one radius, 6. concentric groups one centre.
+void share_radii_and_centres(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations) {
   for (const FeatureRelation& r : relations) {
     const std::vector<int>& group = r.features;
-    const double area = group_area(group);
+    const double area = group_area(group, features);
     if (!(area > 0.0)) continue;
     if (r.kind == "equal_radius") {  // 5. one radius: the area-weighted median, blind to a poor fit
       std::vector<std::pair<double, double>> radii;
@@ -469,9 +475,9 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       for (int m : group) features[m].surface.point = centre;
     }
   }
+}
 
-  if (options.points) refit_related_tori(features, relations, *options.points, cos_tolerance, options.distance_tolerance);
-
+void touch_tangent_planes(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations, double angle) {
   // 7. Tangency (thesis 4.3): a cylinder tangent to planes parallel to its axis keeps its radius
   // (possibly just made equal to others) and moves its axis so that it touches them: one plane
   // fixes the axis's distance from it, two fix the axis.
@@ -505,7 +511,9 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       if (shift.allFinite()) c.point += shift[0] * e1 + shift[1] * e2;
     }
   }
+}
 
+void spheres_from_cylinders(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations) {
   // 8. A sphere tangent to cylinders (the ball in the corner where fillets meet, thesis 4.3 case 2)
   // is completely defined by them: its centre is the point nearest to their axes (on the axis for
   // one), its radius theirs.
@@ -526,7 +534,10 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
     }
     sphere.surface.radius = radius;
   }
+}
 
+void tori_on_plane_and_wall(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
+                            const IdealizationOptions& options, double cos_tolerance) {
   // 9. A torus tangent to a plane across its axis and to a coaxial cylinder or cone (the fillet at
   // the foot of a boss, the rim of a bore, between a cone and the face across it) keeps its tube
   // radius and touches both: its centre lies the tube radius from the plane, its circle the tube
@@ -561,7 +572,24 @@ int idealize_features(std::vector<Feature>& features, const std::vector<FeatureR
       break;
     }
   }
+}
 
+}  // namespace
+
+int idealize_features(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
+                      const IdealizationOptions& options) {
+  const std::vector<Feature> before = features;
+  const double angle = options.angle_tolerance_degrees * M_PI / 180.0;
+  const double cos_tolerance = std::cos(angle);
+  const std::vector<Eigen::Vector3d> ideals = align_directions(features, relations, options, angle, cos_tolerance);
+  share_planes_and_axes(features, relations);
+  refit_moved_profiles(features, before, options);
+  if (options.points) one_cone_per_surface(features, relations, *options.points, ideals, angle, options.residual_ratio);
+  share_radii_and_centres(features, relations);
+  if (options.points) refit_related_tori(features, relations, *options.points, cos_tolerance, options.distance_tolerance);
+  touch_tangent_planes(features, relations, angle);
+  spheres_from_cylinders(features, relations);
+  tori_on_plane_and_wall(features, relations, options, cos_tolerance);
   int changed = 0;
   for (size_t i = 0; i < features.size(); ++i) {
     const Surface &a = before[i].surface, &b = features[i].surface;

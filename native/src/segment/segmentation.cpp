@@ -218,6 +218,115 @@ int compact_patches(std::vector<int>& labels, std::vector<int>& working_labels, 
 
 }  // namespace
 
+namespace {
+
+// The orientation repair of the prepared mesh (`flipped`, per prepared face) in input terms, for
+// the later stages that work on the input's triangles; a duplicate takes the orientation of the
+// triangle it repeats.
+std::vector<char> flipped_in_input(const TriangleMesh& input, const PreparedMesh& prepared,
+                                   const std::vector<char>& flipped) {
+  std::vector<char> input_flipped(input.num_faces(), 0);
+  for (int f = 0; f < input.num_faces(); ++f) {
+    const int w = prepared.input_face[f];
+    if (w < 0) continue;
+    const int origin = prepared.face_origin[w];
+    bool reversed = false;  // f lists the vertices of `origin` in the opposite cyclic order
+    if (origin != f) {
+      const int k = input.F(f, 0) == input.F(origin, 0) ? 0 : input.F(f, 0) == input.F(origin, 1) ? 1 : 2;
+      reversed = input.F(f, 1) != input.F(origin, (k + 1) % 3);
+    }
+    input_flipped[f] = static_cast<char>(flipped[w] ^ (reversed ? 1 : 0));
+  }
+  return input_flipped;
+}
+
+// Map back: each input face takes the patch covering most of its area (out.labels) and is a
+// transition where transitions cover most of it (out.transition); duplicates repeat the label of
+// the face they duplicate. `area`: of the working mesh's faces.
+void map_back_labels(const TriangleMesh& input, const PreparedMesh& prepared, const Eigen::VectorXd& area,
+                     const std::vector<char>& working_transition, Segmentation& out) {
+  const TriangleMesh& mesh = out.working.mesh;
+  const int nf_input = input.num_faces();
+  std::vector<std::vector<std::pair<int, double>>> shares(nf_input);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int patch = out.working_labels[f];
+    if (patch == kTransition) continue;
+    auto& s = shares[out.working.face_origin[f]];
+    auto it = std::find_if(s.begin(), s.end(), [&](const auto& p) { return p.first == patch; });
+    if (it == s.end()) s.emplace_back(patch, area[f]);
+    else it->second += area[f];
+  }
+  out.labels.assign(nf_input, kTransition);
+  for (int f = 0; f < nf_input; ++f) {
+    double best = 0.0;
+    for (const auto& [patch, a] : shares[f])
+      if (a > best) {
+        best = a;
+        out.labels[f] = patch;
+      }
+  }
+  std::vector<double> transition_area(nf_input, 0.0), total_area(nf_input, 0.0);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    total_area[out.working.face_origin[f]] += area[f];
+    if (working_transition[f]) transition_area[out.working.face_origin[f]] += area[f];
+  }
+  out.transition.assign(nf_input, 0);
+  for (int f = 0; f < nf_input; ++f) out.transition[f] = transition_area[f] > 0.5 * total_area[f];
+  for (int f = 0; f < nf_input; ++f) {
+    const int working = prepared.input_face[f];
+    if (working >= 0 && prepared.face_origin[working] != f) {
+      out.labels[f] = out.labels[prepared.face_origin[working]];
+      out.transition[f] = out.transition[prepared.face_origin[working]];
+    }
+  }
+}
+
+// The summary of every patch: its kind, histogram range, mean H and K (area-weighted over the
+// working mesh's faces, `area`) and its input triangles and area.
+void summarize_patches(const TriangleMesh& input, const Eigen::VectorXd& area, const std::vector<int>& face_class,
+                       int num_patches, Segmentation& out) {
+  const TriangleMesh& mesh = out.working.mesh;
+  const Eigen::VectorXd& H = out.mean_curvature;
+  const int nf_input = input.num_faces();
+  out.patches.resize(num_patches);
+  std::vector<double> curvature_area(num_patches, 0.0);
+  for (int p = 0; p < num_patches; ++p) {
+    out.patches[p].id = p;
+    out.patches[p].range_low = out.patches[p].range_high = std::numeric_limits<double>::quiet_NaN();
+  }
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int p = out.working_labels[f];
+    if (p == kTransition) continue;
+    PatchSummary& s = out.patches[p];
+    const int cls = face_class[f];
+    if (cls == kSharpConcave) s.kind = PatchKind::SharpConcave;
+    else if (cls == kSharpConvex) s.kind = PatchKind::SharpConvex;
+    else if (cls >= kSmoothBase) {
+      s.range_low = out.histogram.range_lower(cls - kSmoothBase);
+      s.range_high = out.histogram.range_upper(cls - kSmoothBase);
+    }
+    const double face_h = (H[mesh.F(f, 0)] + H[mesh.F(f, 1)] + H[mesh.F(f, 2)]) / 3.0;
+    const Eigen::VectorXd& K = out.gaussian_curvature;
+    const double face_k = (K[mesh.F(f, 0)] + K[mesh.F(f, 1)] + K[mesh.F(f, 2)]) / 3.0;
+    s.mean_curvature += area[f] * face_h;
+    s.mean_gaussian += area[f] * face_k;
+    curvature_area[p] += area[f];
+  }
+  const Eigen::VectorXd input_area = face_areas(input);
+  for (int f = 0; f < nf_input; ++f)
+    if (out.labels[f] != kTransition) {
+      ++out.patches[out.labels[f]].input_triangles;
+      out.patches[out.labels[f]].area += input_area[f];
+    }
+  for (int p = 0; p < num_patches; ++p)
+    if (curvature_area[p] > 0.0) {
+      out.patches[p].mean_curvature /= curvature_area[p];
+      out.patches[p].mean_gaussian /= curvature_area[p];
+    }
+}
+
+}  // namespace
+
 Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& options) {
   Segmentation out;
   StageTimer timer(out.timings);
@@ -240,21 +349,7 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
     out.mesh_check.unused_vertices_removed = prepared.removed_unused_vertices;
     if (!out.mesh_check.flipped.empty()) {
       apply_orientation(prepared.mesh, out.mesh_check);
-      // The same repair in input terms, for the later stages that work on the input's triangles; a
-      // duplicate takes the orientation of the triangle it repeats.
-      const std::vector<char>& flipped = out.mesh_check.flipped;
-      out.input_flipped.assign(input.num_faces(), 0);
-      for (int f = 0; f < input.num_faces(); ++f) {
-        const int w = prepared.input_face[f];
-        if (w < 0) continue;
-        const int origin = prepared.face_origin[w];
-        bool reversed = false;  // f lists the vertices of `origin` in the opposite cyclic order
-        if (origin != f) {
-          const int k = input.F(f, 0) == input.F(origin, 0) ? 0 : input.F(f, 0) == input.F(origin, 1) ? 1 : 2;
-          reversed = input.F(f, 1) != input.F(origin, (k + 1) % 3);
-        }
-        out.input_flipped[f] = static_cast<char>(flipped[w] ^ (reversed ? 1 : 0));
-      }
+      out.input_flipped = flipped_in_input(input, prepared, out.mesh_check.flipped);
       out.mesh_check.flipped = {};
       topology.emplace(prepared.mesh);
     }
@@ -335,80 +430,11 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
   const ProgressSpan map_back = progress.sub("map_back", 0.985, 1.0);
   map_back.step(0.0);
 
-  // Map back: each input face takes the patch covering most of its area; duplicates repeat the
-  // label of the face they duplicate.
-  const int nf_input = input.num_faces();
   const Eigen::VectorXd area = face_areas(mesh);
-  std::vector<std::vector<std::pair<int, double>>> shares(nf_input);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const int patch = out.working_labels[f];
-    if (patch == kTransition) continue;
-    auto& s = shares[out.working.face_origin[f]];
-    auto it = std::find_if(s.begin(), s.end(), [&](const auto& p) { return p.first == patch; });
-    if (it == s.end()) s.emplace_back(patch, area[f]);
-    else it->second += area[f];
-  }
-  out.labels.assign(nf_input, kTransition);
-  for (int f = 0; f < nf_input; ++f) {
-    double best = 0.0;
-    for (const auto& [patch, a] : shares[f])
-      if (a > best) {
-        best = a;
-        out.labels[f] = patch;
-      }
-  }
-  std::vector<double> transition_area(nf_input, 0.0), total_area(nf_input, 0.0);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    total_area[out.working.face_origin[f]] += area[f];
-    if (working_transition[f]) transition_area[out.working.face_origin[f]] += area[f];
-  }
-  out.transition.assign(nf_input, 0);
-  for (int f = 0; f < nf_input; ++f) out.transition[f] = transition_area[f] > 0.5 * total_area[f];
-  for (int f = 0; f < nf_input; ++f) {
-    const int working = prepared.input_face[f];
-    if (working >= 0 && prepared.face_origin[working] != f) {
-      out.labels[f] = out.labels[prepared.face_origin[working]];
-      out.transition[f] = out.transition[prepared.face_origin[working]];
-    }
-  }
+  map_back_labels(input, prepared, area, working_transition, out);
   const int num_patches = compact_patches(out.labels, out.working_labels, num_classified);
 
-  // Summaries.
-  out.patches.resize(num_patches);
-  std::vector<double> curvature_area(num_patches, 0.0);
-  for (int p = 0; p < num_patches; ++p) {
-    out.patches[p].id = p;
-    out.patches[p].range_low = out.patches[p].range_high = std::numeric_limits<double>::quiet_NaN();
-  }
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const int p = out.working_labels[f];
-    if (p == kTransition) continue;
-    PatchSummary& s = out.patches[p];
-    const int cls = face_class[f];
-    if (cls == kSharpConcave) s.kind = PatchKind::SharpConcave;
-    else if (cls == kSharpConvex) s.kind = PatchKind::SharpConvex;
-    else if (cls >= kSmoothBase) {
-      s.range_low = out.histogram.range_lower(cls - kSmoothBase);
-      s.range_high = out.histogram.range_upper(cls - kSmoothBase);
-    }
-    const double face_h = (H[mesh.F(f, 0)] + H[mesh.F(f, 1)] + H[mesh.F(f, 2)]) / 3.0;
-    const Eigen::VectorXd& K = out.gaussian_curvature;
-    const double face_k = (K[mesh.F(f, 0)] + K[mesh.F(f, 1)] + K[mesh.F(f, 2)]) / 3.0;
-    s.mean_curvature += area[f] * face_h;
-    s.mean_gaussian += area[f] * face_k;
-    curvature_area[p] += area[f];
-  }
-  const Eigen::VectorXd input_area = face_areas(input);
-  for (int f = 0; f < nf_input; ++f)
-    if (out.labels[f] != kTransition) {
-      ++out.patches[out.labels[f]].input_triangles;
-      out.patches[out.labels[f]].area += input_area[f];
-    }
-  for (int p = 0; p < num_patches; ++p)
-    if (curvature_area[p] > 0.0) {
-      out.patches[p].mean_curvature /= curvature_area[p];
-      out.patches[p].mean_gaussian /= curvature_area[p];
-    }
+  summarize_patches(input, area, face_class, num_patches, out);
   timer.stage("map_back");
   map_back.step(1.0);
   return out;
