@@ -8,19 +8,14 @@ import itertools
 
 import numpy as np
 
+from ._loader import native
 from .features import idealize
 from .mesh import Mesh, MeshError
 from .segmentation import segment
 
-# Thesis colour code for the surface types; RGB in 0..1.
-SURFACE_COLORS = {
-    "plane": (0.56, 0.93, 0.56),     # light green
-    "cylinder": (1.0, 1.0, 0.0),     # yellow
-    "cone": (0.68, 0.85, 0.90),      # light blue
-    "sphere": (0.0, 0.39, 0.0),      # dark green
-    "torus": (0.55, 0.0, 0.0),       # dark red
-    "freeform": (0.6, 0.6, 0.6),     # grey (not in the thesis, which has no freeform features)
-}
+# The thesis's colour code for the surface types (RGB in 0..1), from the one table in the core
+# (fit/surface.h), which the STEP export reads too.
+SURFACE_COLORS = native.surface_colors()
 TRANSITION_COLOR = (1.0, 0.0, 0.0)   # edges / transition triangles: red
 
 # Deviation map: colour stops from 0 (blue, on the surface) to the legend's top value (red).

@@ -337,6 +337,20 @@ PYBIND11_MODULE(_native, m) {
       "(distance_tolerance 0: 0.1 % of the bounding-box diagonal).");
 
   m.def(
+      "surface_colors",
+      [] {
+        py::dict d;
+        for (SurfaceType t : {SurfaceType::Plane, SurfaceType::Cylinder, SurfaceType::Cone, SurfaceType::Sphere,
+                              SurfaceType::Torus, SurfaceType::Freeform}) {
+          const std::array<double, 3> c = surface_color(t);
+          d[surface_type_name(t)] = py::make_tuple(c[0], c[1], c[2]);
+        }
+        return d;
+      },
+      "The colour of each surface type (red, green, blue in 0..1): the thesis's feature colours, grey "
+      "for freeform. The one table of the STEP export and the workbench.");
+
+  m.def(
       "feature_defaults",
       [] {
         const FeatureOptions o;

@@ -48,16 +48,19 @@ std::string brep_string(const TopoDS_Shape& shape) {
 
 namespace {
 
-// The thesis's feature colours (feature_layer / the workbench's colouring).
-Quantity_Color surface_color(const TopoDS_Face& face) {
+// The face's colour by its surface's type (surface_color).
+Quantity_Color face_color(const TopoDS_Face& face) {
+  SurfaceType type = SurfaceType::Freeform;
   switch (BRepAdaptor_Surface(face).GetType()) {
-    case GeomAbs_Plane: return Quantity_Color(0.56, 0.93, 0.56, Quantity_TOC_RGB);
-    case GeomAbs_Cylinder: return Quantity_Color(1.0, 1.0, 0.0, Quantity_TOC_RGB);
-    case GeomAbs_Cone: return Quantity_Color(0.68, 0.85, 0.90, Quantity_TOC_RGB);
-    case GeomAbs_Sphere: return Quantity_Color(0.0, 0.39, 0.0, Quantity_TOC_RGB);
-    case GeomAbs_Torus: return Quantity_Color(0.55, 0.0, 0.0, Quantity_TOC_RGB);
-    default: return Quantity_Color(0.60, 0.60, 0.60, Quantity_TOC_RGB);
+    case GeomAbs_Plane: type = SurfaceType::Plane; break;
+    case GeomAbs_Cylinder: type = SurfaceType::Cylinder; break;
+    case GeomAbs_Cone: type = SurfaceType::Cone; break;
+    case GeomAbs_Sphere: type = SurfaceType::Sphere; break;
+    case GeomAbs_Torus: type = SurfaceType::Torus; break;
+    default: break;
   }
+  const std::array<double, 3> rgb = surface_color(type);
+  return Quantity_Color(rgb[0], rgb[1], rgb[2], Quantity_TOC_RGB);
 }
 
 // Keeps OCCT's default messenger quiet while alive (the STEP writer reports its progress on
@@ -173,7 +176,7 @@ void write_step(const TopoDS_Shape& shape, const std::string& path) {
     const TDF_Label part = shapes->AddShape(shape, Standard_False);
     for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
       const TDF_Label face = shapes->AddSubShape(part, e.Current());
-      if (!face.IsNull()) colors->SetColor(face, surface_color(TopoDS::Face(e.Current())), XCAFDoc_ColorSurf);
+      if (!face.IsNull()) colors->SetColor(face, face_color(TopoDS::Face(e.Current())), XCAFDoc_ColorSurf);
     }
     Interface_Static::SetCVal("write.step.unit", "MM");
     Interface_Static::SetCVal("write.step.schema", "AP214IS");

@@ -221,4 +221,15 @@ AxesMeeting point_nearest_to_axes(const std::vector<const Surface*>& surfaces) {
   return out;
 }
 
+std::array<double, 3> surface_color(SurfaceType type) {
+  switch (type) {
+    case SurfaceType::Plane: return {0.56, 0.93, 0.56};
+    case SurfaceType::Cylinder: return {1.0, 1.0, 0.0};
+    case SurfaceType::Cone: return {0.68, 0.85, 0.90};
+    case SurfaceType::Sphere: return {0.0, 0.39, 0.0};
+    case SurfaceType::Torus: return {0.55, 0.0, 0.0};
+    default: return {0.60, 0.60, 0.60};
+  }
+}
+
 }  // namespace idealize

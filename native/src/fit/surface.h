@@ -1,6 +1,8 @@
 // The analytic surfaces a prismatic feature can lie on, and their point-surface geometry.
 #pragma once
 
+#include <array>
+
 #include <Eigen/Core>
 
 #include <cstddef>
@@ -16,6 +18,12 @@ constexpr double kExactFraction = 0.01;
 
 // Name used in reports: "plane", "cylinder", "cone", "sphere", "torus", "freeform".
 const char* surface_type_name(SurfaceType type);
+
+// The colour of each surface type, red, green, blue in 0..1: the thesis's feature colours (plane
+// light green, cylinder yellow, cone light blue, sphere dark green, torus dark red) and grey for
+// freeform surfaces, which the thesis does not have. The one table the STEP export, the feature
+// layer's colouring and the workbench read.
+std::array<double, 3> surface_color(SurfaceType type);
 
 // Degrees of freedom of a surface of the type (0 for freeform).
 int parameter_count(SurfaceType type);
