@@ -43,7 +43,7 @@ sys.path.insert(0, CONFIG["repo"])
 
 
 def mesh_object(doc, name, path):
-    from idealize.layer_object import freecad_mesh
+    from idealize.freecad.layer_object import freecad_mesh
     data = np.load(path)
     obj = doc.addObject("Mesh::Feature", name)
     obj.Mesh = freecad_mesh(data["V"], data["F"])
@@ -107,8 +107,8 @@ def run():
     # 75k: the document update, against the bare computation of the same run.
     doc = App.newDocument("Layer")
     source = mesh_object(doc, "Part", CONFIG["layer_mesh"])
-    mesh = idealize.freecad_mesh.mesh_from_freecad(source)
-    from idealize import layer_object
+    mesh = idealize.freecad.mesh.mesh_from_freecad(source)
+    from idealize.freecad import layer_object
     options = layer_object.layer_options(layer_object.preferences())  # what the command computes
     compute = []
     for _ in range(CONFIG["repeat"]):

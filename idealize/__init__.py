@@ -20,7 +20,6 @@ Long calls take ``progress=idealize.Progress()`` to be watched and cancelled fro
 from .brep import Solid, make_solid
 from .curvature import vertex_curvature
 from .features import FeatureLayer, idealize
-from .layer_object import feature_layer, make_feature_layer
 from .mesh import Mesh, MeshError, load_mesh
 from .progress import Cancelled, Progress
 from .segmentation import Segmentation, segment
@@ -28,3 +27,12 @@ from .segmentation import Segmentation, segment
 __all__ = ["Cancelled", "FeatureLayer", "feature_layer", "Mesh", "MeshError", "idealize", "load_mesh",
            "make_feature_layer", "make_solid", "Progress", "Segmentation", "segment", "Solid", "vertex_curvature"]
 __version__ = "0.1.0"
+
+
+def __getattr__(name):
+    """feature_layer and make_feature_layer, the feature layer document object's functions, come
+    from idealize.freecad when first asked for: importing idealize imports nothing of FreeCAD."""
+    if name in ("feature_layer", "make_feature_layer"):
+        from .freecad import layer_object
+        return getattr(layer_object, name)
+    raise AttributeError("module 'idealize' has no attribute %r" % name)

@@ -151,11 +151,12 @@ def _idealize(mesh, segmentation, progress, options, self_intersections=False):
 
 
 def as_feature_layer(layer):
-    """A :class:`FeatureLayer` as is, or the one a feature layer document object holds."""
+    """A :class:`FeatureLayer` as is, or the one a feature layer document object holds (its proxy
+    makes it: the core imports nothing of FreeCAD)."""
     if isinstance(layer, FeatureLayer):
         return layer
-    from . import layer_object
-    if layer_object.is_feature_layer(layer):
-        return layer_object.feature_layer(layer)
+    proxy = getattr(layer, "Proxy", None)
+    if getattr(proxy, "Type", None) == "IdealizeFeatureLayer" and hasattr(proxy, "feature_layer"):
+        return proxy.feature_layer(layer)
     raise TypeError("expected an idealize.FeatureLayer or a feature layer document object, got %s"
                     % type(layer).__name__)

@@ -228,7 +228,7 @@ def test_meshes_beyond_the_memory_available_are_refused(monkeypatch):
 
 
 def test_mesh_check_summary_names_findings_and_repairs():
-    from idealize.freecad_mesh import mesh_check_summary
+    from idealize.freecad.mesh import mesh_check_summary
     check = {"shells": 2, "boundary_edges": 9, "nonmanifold_edges": 1, "nonmanifold_vertices": 0, "boundary_loops": 2,
              "largest_hole_edges": 6, "inconsistent_edges": 4, "flipped_faces_repaired": 3,
              "closed_shells_turned_outward": 0, "nonorientable_shells": 0, "self_intersecting_pairs": 5,

@@ -170,7 +170,7 @@ def test_freeform_top_becomes_a_bspline_face(export, tmp_path):
     solid.write_step(path)
     back = Part.read(str(path))
     assert len(back.Solids) == 1 and back.Solids[0].isValid() and len(back.Faces) == 6
-    from idealize.freecad_solid import primitive_shape
+    from idealize.freecad.solid import primitive_shape
     labels = np.asarray(layer.labels)
     [freeform] = [f for f in layer.features if f["type"] == "freeform"]
     faces = F[labels == freeform["id"]]
@@ -308,7 +308,7 @@ def test_document_objects_without_gui(tmp_path):
     group with one primitive per feature, the source mesh untouched; export_step writes it."""
     FreeCAD, Part, _ = shapes.freecad()
     import Mesh
-    from idealize import freecad_solid
+    from idealize.freecad import solid as freecad_solid
     part = shapes.bracket_solid()
     V, F, _ = shapes.tessellate_with_faces(part, 0.05)
     doc = FreeCAD.newDocument("IdealizeBrepTest")
@@ -784,7 +784,7 @@ def test_cad_export_of_a_slotted_lemon_dome_gives_its_solid():
     assert solid.surface_types == {"plane": 4, "cylinder": 1, "cone": 1, "torus": 2}
     assert abs(solid.volume / part.Volume - 1) < 5e-4
     # Each feature's Part primitive: a lemon's is the spindle torus it lies on.
-    from idealize.freecad_solid import primitive_shape
+    from idealize.freecad.solid import primitive_shape
     labels = np.asarray(layer.labels)
     for feature in layer.features:
         shape = primitive_shape(feature, V[np.unique(F[labels == feature["id"]])])

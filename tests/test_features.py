@@ -821,7 +821,7 @@ def height_field_points(n, noise=0.0, seed=0):
 def test_bspline_fits_a_height_field():
     """A smooth height field: exact samples are fitted to a small fraction of its 3 mm relief, and
     FreeCAD's B-spline of the poles and knots passes through them where the fit's plane puts them."""
-    from idealize.freecad_solid import bspline_surface
+    from idealize.freecad.solid import bspline_surface
     points, normals = height_field_points(4000)
     fit = native.fit_bspline_surface(points, normals, np.ones(len(points)))
     assert fit["valid"], fit["problem"]

@@ -77,7 +77,7 @@ def dominant_hue(path):
 
 def type_color_counts(colors):
     """{surface type: facets} of per-facet colours in the thesis palette ("other": anything else)."""
-    from idealize.freecad_mesh import SURFACE_COLORS
+    from idealize.freecad.mesh import SURFACE_COLORS
     palette = {tuple(round(c, 2) for c in rgb): t for t, rgb in SURFACE_COLORS.items()}
     seen = {}
     for c in colors:
@@ -361,7 +361,7 @@ def run():
 
     # Bad input of every class through Segment & Idealize: a clear error (box, report view) and an
     # untouched document, or a layer whose panel names the repair; FreeCAD never goes down.
-    from idealize.layer_object import freecad_mesh as exact_mesh
+    from idealize.freecad.layer_object import freecad_mesh as exact_mesh
     box = MeshPart.meshFromShape(Shape=Part.makeBox(30, 20, 10), MaxLength=2.0)
     points, facets = box.Topology
     V = [[p.x, p.y, p.z] for p in points]

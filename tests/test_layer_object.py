@@ -2,6 +2,7 @@
 freecadcmd): made from a mesh, holds what the layer knows, recomputes when the source changes and
 only then, survives save and reopen, feeds make_solid; bad input is refused with a clear error."""
 import json
+import os
 
 import numpy as np
 import pytest
@@ -23,7 +24,7 @@ def document():
 
 
 def bracket_object(doc):
-    from idealize.layer_object import freecad_mesh
+    from idealize.freecad.layer_object import freecad_mesh
     V, F, _ = shapes.tessellate_with_faces(shapes.bracket_solid(), 0.05)
     source = doc.addObject("Mesh::Feature", "Bracket")
     source.Mesh = freecad_mesh(V, F)
@@ -40,7 +41,7 @@ def test_layer_object_holds_the_layer(document, tmp_path):
     layer = idealize.make_feature_layer(source)
     doc.recompute()
 
-    direct = idealize.idealize(idealize.freecad_mesh.mesh_from_freecad(source),  # single precision, as stored
+    direct = idealize.idealize(idealize.freecad.mesh.mesh_from_freecad(source),  # single precision, as stored
                                self_intersections=True)
     assert layer.TypeId == "Mesh::FeaturePython" and layer.Label == "Bracket_Layer" and layer.Source == source
     assert list(layer.Labels) == direct.labels.tolist()
@@ -50,7 +51,7 @@ def test_layer_object_holds_the_layer(document, tmp_path):
     assert len(table["relations"]) == len(direct.relations) and table["adjacency"]
     assert table["mesh_check"] == direct.mesh_check and table["mesh_check"]["self_intersecting_pairs"] == 0
     assert layer.Mesh.CountFacets == len(F) and layer.Mesh.CountPoints == len(V)
-    idealized = idealize.freecad_mesh.mesh_from_freecad(layer.Mesh).vertices
+    idealized = idealize.freecad.mesh.mesh_from_freecad(layer.Mesh).vertices
     assert np.allclose(idealized, direct.idealized_vertices, atol=1e-5)  # single precision of Mesh
     assert len(layer.VertexDeviation) == len(V)
     assert float(layer.MaxDeviation) == pytest.approx(direct.deviation["max"])
@@ -110,7 +111,7 @@ def test_layer_recomputes_when_source_or_options_change(document):
 def test_new_layers_take_their_options_from_the_preferences(document):
     FreeCAD, doc = document
     import idealize
-    from idealize import layer_object
+    from idealize.freecad import layer_object
     params = FreeCAD.ParamGet(layer_object.PARAMETER_PATH)
     try:
         params.SetFloat("AngleTolerance", 2.5)
@@ -133,7 +134,7 @@ def test_preference_page_names_the_parameters_read():
     """The preferences page (.ui) writes exactly the parameters the layer reads."""
     import os
     import xml.etree.ElementTree as ElementTree
-    from idealize import layer_object
+    from idealize.freecad import layer_object
     path = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "Resources", "ui",
                         "PreferencesIdealize.ui")
     widgets = ElementTree.parse(path).getroot().iter("widget")
@@ -166,7 +167,7 @@ def test_layer_refuses_bad_input(document):
 
 
 def test_deviation_colors_scale_and_missing_values():
-    from idealize.freecad_mesh import DEVIATION_STOPS, SURFACE_COLORS, deviation_colors
+    from idealize.freecad.mesh import DEVIATION_STOPS, SURFACE_COLORS, deviation_colors
     colors = deviation_colors([0.0, 0.5, 1.0, 7.0, float("nan")], 1.0)
     assert np.allclose(colors[0], DEVIATION_STOPS[0]) and np.allclose(colors[2], DEVIATION_STOPS[-1])
     assert np.allclose(colors[3], DEVIATION_STOPS[-1])  # clamped above the scale
@@ -183,7 +184,7 @@ def test_option_defaults_have_one_source():
     import os
     import xml.etree.ElementTree as ElementTree
     import idealize
-    from idealize import layer_object
+    from idealize.freecad import layer_object
     from idealize._loader import native
     defaults = native.feature_defaults()
     signature = inspect.signature(idealize.idealize).parameters
@@ -211,3 +212,25 @@ def test_option_defaults_have_one_source():
     assert shown["RadiusTolerancePercent"] == round(100 * defaults["radius_tolerance"])
     assert shown["IdealizeRelations"] == defaults["idealize"]
     assert shown.get("DistanceTolerance") in (None, defaults["distance_tolerance"])
+
+
+def test_the_core_api_imports_nothing_of_freecad():
+    """`import idealize` and a conversion load no FreeCAD module: the FreeCAD glue lives in
+    idealize.freecad, the GUI in idealize.gui. Documents saved by earlier versions name the layer's
+    proxy as idealize.layer_object.FeatureLayerObject, which still resolves."""
+    import subprocess
+    import sys
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    code = ("import sys; import idealize; import numpy as np; "
+            "V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float); "
+            "F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], np.int32); "
+            "idealize.make_solid(idealize.idealize(idealize.Mesh(V, F))); "
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('FreeCAD', 'Part', 'Mesh', 'FreeCADGui', 'PySide')"
+            " or m.startswith(('idealize.freecad', 'idealize.gui'))))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]", out.stdout
+    old = subprocess.run([sys.executable, "-c", "import sys; sys.path.append('/usr/lib/freecad-python3/lib'); import FreeCAD; "
+                          "from idealize.layer_object import FeatureLayerObject as A; "
+                          "from idealize.freecad.layer_object import FeatureLayerObject as B; print(A is B)"],
+                         cwd=root, capture_output=True, text=True)
+    assert old.stdout.strip() == "True", old.stderr

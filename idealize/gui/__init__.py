@@ -1,4 +1,4 @@
-"""FreeCAD GUI layer of Idealize: commands only; the work is done by idealize.freecad_mesh."""
+"""FreeCAD GUI layer of Idealize: commands only; the work is done by idealize.freecad."""
 import os
 
 # Resources/ sits at the repository root, two levels above this package.

@@ -4,7 +4,9 @@ import time
 import FreeCAD
 import FreeCADGui
 
-from .. import freecad_mesh, freecad_solid, layer_object
+from ..freecad import layer_object
+from ..freecad import mesh as freecad_mesh
+from ..freecad import solid as freecad_solid
 from ..brep import make_solid
 from ..features import count_summary
 from ..segmentation import segment

@@ -8,9 +8,9 @@ import os
 import FreeCADGui
 import numpy as np
 
-from .. import layer_object
+from ..freecad import layer_object
 from ..features import idealize
-from ..freecad_mesh import mesh_check_summary, mesh_from_freecad
+from ..freecad.mesh import mesh_check_summary, mesh_from_freecad
 from .progress import run_with_progress
 
 UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),

@@ -8,8 +8,8 @@ import json
 import FreeCAD
 import FreeCADGui
 
-from .. import layer_object
-from ..freecad_mesh import FACE_COLORS, SURFACE_COLORS, deviation_colors
+from ..freecad import layer_object
+from ..freecad.mesh import FACE_COLORS, SURFACE_COLORS, deviation_colors
 from ..progress import Cancelled
 from . import icon
 from .progress import run_with_progress

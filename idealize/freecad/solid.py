@@ -4,9 +4,9 @@ Works in freecadcmd and in the GUI; the GUI commands (idealize.gui) add undo and
 """
 import numpy as np
 
-from ._loader import native
-from .brep import make_solid
-from .freecad_mesh import SURFACE_COLORS, idealize_mesh_object
+from .._loader import native
+from ..brep import make_solid
+from .mesh import SURFACE_COLORS, idealize_mesh_object
 
 # Surface type of a Part face -> the type names of the feature layer.
 PART_SURFACE_TYPES = {"Plane": "plane", "Cylinder": "cylinder", "Cone": "cone", "Sphere": "sphere",

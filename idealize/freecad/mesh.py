@@ -8,10 +8,10 @@ import itertools
 
 import numpy as np
 
-from ._loader import native
-from .features import idealize
-from .mesh import Mesh, MeshError
-from .segmentation import segment
+from .._loader import native
+from ..features import idealize
+from ..mesh import Mesh, MeshError
+from ..segmentation import segment
 
 # The thesis's colour code for the surface types (RGB in 0..1), from the one table in the core
 # (fit/surface.h), which the STEP export reads too.
