@@ -66,14 +66,22 @@ def test_layer_object_holds_the_layer(document, tmp_path):
     # Save and reopen: the same layer, no recompute.
     path = str(tmp_path / "layer.FCStd")
     name, labels, table = layer.Name, list(layer.Labels), layer.FeatureTable
+    layer_deviation = list(layer.VertexDeviation)
     doc.saveAs(path)
     FreeCAD.closeDocument(doc.Name)
     reopened = FreeCAD.openDocument(path)
     again = reopened.getObject(name)
     assert again.Proxy.Type == "IdealizeFeatureLayer"
     assert list(again.Labels) == labels and again.FeatureTable == table
+    assert list(again.VertexDeviation) == pytest.approx(list(layer_deviation), nan_ok=True)
     assert "Touched" not in again.State
     assert idealize.feature_layer(again).labels.tolist() == direct.labels.tolist()
+    # Saved compactly: the labels as packed binary, not one XML element per triangle.
+    import zipfile
+    with zipfile.ZipFile(path) as saved:
+        xml = saved.read("Document.xml").decode()
+    assert '<Property name="LabelsData"' in xml
+    assert xml.count("<I v=") < 100
 
 
 @needs_freecad

@@ -4,7 +4,9 @@ A ``Mesh::FeaturePython`` linked to its source mesh (which stays untouched). Its
 idealized mesh (the source's triangles, vertices moved onto their features); everything the layer
 knows lives in properties, so undo, redo, save and reopen keep it: Labels (feature per triangle),
 FeatureTable (JSON: features, adjacency, relations, deviation, tolerance), VertexDeviation and the
-per-facet FaceColors the view shows. It recomputes when the source mesh or its options change;
+per-facet FaceColors the view shows. Labels is saved compactly (zlib-compressed binary, base64 in
+LabelsData, instead of one XML element per triangle: FreeCAD saves an integer list so, a float
+list as a binary file) and rebuilt when the document is reopened. It recomputes when the source mesh or its options change;
 a recompute with nothing changed costs one fingerprint of the source.
 
 Console use (also in freecadcmd)::
@@ -13,9 +15,11 @@ Console use (also in freecadcmd)::
     layer = idealize.make_feature_layer(App.ActiveDocument.Mesh)
     solid = idealize.make_solid(layer)
 """
+import base64
 import hashlib
 import json
 import os
+import zlib
 
 import numpy as np
 
@@ -181,6 +185,7 @@ class LayerRecord:
         # The triangles with the mesh check's orientation repair: the B-rep is built on them.
         self.mesh_data = ply_bytes(layer.idealized_vertices, layer.oriented_faces)
         self.labels = np.asarray(layer.labels, dtype=np.int64).tolist()
+        self.labels_data = packed(layer.labels, "<i4")
         self.table = json.dumps(_jsonable({
             "features": layer.features, "adjacency": layer.adjacency, "relations": layer.relations,
             "deviation": layer.deviation, "distance_tolerance": layer.distance_tolerance,
@@ -197,6 +202,7 @@ class LayerRecord:
         layer = self.layer
         obj.Mesh = mesh_from_ply(self.mesh_data)
         obj.Labels = self.labels
+        obj.LabelsData = self.labels_data
         obj.FeatureTable = self.table
         obj.VertexDeviation = self.vertex_deviation
         obj.Features = len(layer.features)
@@ -285,6 +291,7 @@ class FeatureLayerObject:
                    ("App::PropertyColorList", FACE_COLORS, "Colour of every facet (see the view's ColorBy)")]
         for kind, name, description in results:
             obj.addProperty(kind, name, "Layer", description, _READ_ONLY | _OUTPUT)
+        _compact_storage(obj)
         obj.setEditorMode("SourceFingerprint", 2)  # hidden: bookkeeping only
         obj.setEditorMode("Labels", 2)  # hidden: a long list the property editor would choke on
         obj.setEditorMode("VertexDeviation", 2)
@@ -308,6 +315,7 @@ class FeatureLayerObject:
                 record.store(obj)
 
     def onDocumentRestored(self, obj):
+        restore_compact(obj)
         _watch_sources()
 
     # All state is in properties. FreeCAD 0.20 saves a proxy with __getstate__ when it has one,
@@ -323,6 +331,44 @@ class FeatureLayerObject:
 
     def loads(self, state):
         return None
+
+
+# The lists saved compactly: (list property, its packed copy, dtype).
+_PACKED = (("Labels", "LabelsData", "<i4"),)
+
+
+def packed(values, dtype):
+    """`values` as zlib-compressed little-endian `dtype` bytes in base64: what a document saves."""
+    return base64.b64encode(zlib.compress(np.ascontiguousarray(values, dtype=dtype).tobytes(), 6)).decode("ascii")
+
+
+def unpacked(text, dtype):
+    """The array `packed` wrote."""
+    return np.frombuffer(zlib.decompress(base64.b64decode(text)), dtype=dtype)
+
+
+def _compact_storage(obj):
+    """The packed copy of Labels (hidden) is what the document saves; the list is transient."""
+    for name, data, _ in _PACKED:
+        if not hasattr(obj, data):
+            obj.addProperty("App::PropertyString", data, "Layer", "%s, packed for saving" % name, _READ_ONLY | _OUTPUT)
+        obj.setEditorMode(data, 2)
+        obj.setPropertyStatus(name, "Transient")
+
+
+def restore_compact(obj):
+    """Rebuilds Labels from its packed copy after the document was read; a layer saved by a version
+    that stored the list keeps it, and is packed from now on."""
+    for name, data, dtype in _PACKED:
+        text = getattr(obj, data, "")
+        if text:
+            values = unpacked(text, dtype)
+            setattr(obj, name, values.tolist())
+        elif hasattr(obj, name):
+            values = getattr(obj, name)
+            _compact_storage(obj)
+            setattr(obj, data, packed(values, dtype))
+    _compact_storage(obj)
 
 
 def color_mode(obj):
