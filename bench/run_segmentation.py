@@ -102,7 +102,7 @@ def run_idealize(V: np.ndarray, F: np.ndarray, repeats: int) -> Dict:
         return {"ok": False, "error": f"labels have shape {labels.shape}, expected ({len(F)},)",
                 "labels": np.full(len(F), -1, np.int64)}
     return {"ok": True, "seconds": seconds, "repeats": repeats, "labels": labels,
-            "features": len(seg.features),
+            "features": len(seg.patches),
             "timings": {k: float(v) for k, v in dict(seg.timings).items()}}
 
 
@@ -453,7 +453,7 @@ def scaling_worker(triangles: int) -> None:
     print(json.dumps({"triangles": m.num_triangles, "vertices": int(len(m.V)), "seconds": seconds,
                       "repeats": repeats, "baseline_rss_kb": baseline, "peak_rss_kb": peak,
                       "ru_maxrss_kb": ru_maxrss,
-                      "features": len(seg.features), "score": s,
+                      "features": len(seg.patches), "score": s,
                       "timings": {k: float(v) for k, v in dict(seg.timings).items()}}))
 
 
@@ -507,7 +507,7 @@ def bench_real(args) -> List[Dict]:
             seconds, seg, repeats = best_time(lambda: idealize.segment(mesh), repeats)
             labels = np.asarray(seg.labels)
             areas = mesh.triangle_areas()
-            row.update({"ok": True, "seconds": seconds, "repeats": repeats, "features": len(seg.features),
+            row.update({"ok": True, "seconds": seconds, "repeats": repeats, "features": len(seg.patches),
                         "patches": int(len(np.unique(labels[labels >= 0]))),
                         "transition_area_fraction": float(areas[labels < 0].sum() / max(areas.sum(), 1e-300)),
                         "timings": {k: float(v) for k, v in dict(seg.timings).items()}})

@@ -6,7 +6,7 @@ Console use (plain Python or FreeCAD)::
     mesh = idealize.load_mesh("part.stl")
     seg = idealize.segment(mesh)
     seg.labels        # one patch id per input triangle, -1 on transitions
-    seg.features      # one summary dict per patch
+    seg.patches       # one summary dict per patch
     layer = idealize.idealize(mesh)
     layer.features    # type, params, rms per feature
     layer.relations   # parallel, coaxial, tangent, ...

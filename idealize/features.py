@@ -140,8 +140,8 @@ def _idealize(mesh, segmentation, progress, options, self_intersections=False):
         segmentation = segment(mesh, progress=progress, self_intersections=self_intersections)
     if progress is not None:
         progress.set_range(*second, restart=False)
-    mean = [p["mean_curvature"] for p in segmentation.features]
-    gaussian = [p["mean_gaussian"] for p in segmentation.features]
+    mean = [p["mean_curvature"] for p in segmentation.patches]
+    gaussian = [p["mean_gaussian"] for p in segmentation.patches]
     low, high = segmentation.zero_mean_curvature
     # Identification and the B-rep see the triangles with the segmentation's orientation repair.
     faces = segmentation.oriented_faces(mesh.faces)

@@ -12,10 +12,11 @@ class Segmentation:
     triangles and where no patch can be reached. The one-triangle-wide transition strips that
     border the patches are folded into them, so patches meet along edge polylines.
     transition: (M,) bool, the triangles that formed those strips before folding.
-    features: list of dicts, one per patch: id, kind ("smooth", "sharp_convex", "sharp_concave"),
-    triangles, area, mean_curvature, curvature_range.
+    patches: list of dicts, one per patch: id, kind ("smooth", "sharp_convex", "sharp_concave"),
+    triangles, area, mean_curvature, curvature_range. (Patches, not features: identification,
+    :func:`idealize.idealize`, makes features of them.)
     timings: seconds per stage.
-    mesh_check: dict, what the checks before processing found (README "Mesh checks and repairs"):
+    mesh_check: dict, what the checks before processing found (docs/mesh-checks.md):
     shells, boundary_edges, boundary_loops, largest_hole_edges, nonmanifold_edges,
     nonmanifold_vertices (kept as they are); inconsistent_edges (adjacent triangles running along
     their shared edge the same way), flipped_faces_repaired, closed_shells_turned_outward,
@@ -30,7 +31,7 @@ class Segmentation:
     def __init__(self, result):
         self.labels = result.pop("labels")
         self.transition = result.pop("transition")
-        self.features = result.pop("patches")
+        self.patches = result.pop("patches")
         self.timings = dict(result.pop("timings"))
         self.removed_degenerate = result.pop("removed_degenerate")
         self.removed_duplicate = result.pop("removed_duplicate")
@@ -51,12 +52,12 @@ class Segmentation:
         return oriented
 
     @property
-    def n_features(self):
-        return len(self.features)
+    def n_patches(self):
+        return len(self.patches)
 
     def __repr__(self):
-        return "<idealize.Segmentation %d features, %d of %d triangles on transition strips>" % (
-            self.n_features, int(np.count_nonzero(self.transition)), len(self.labels))
+        return "<idealize.Segmentation %d patches, %d of %d triangles on transition strips>" % (
+            self.n_patches, int(np.count_nonzero(self.transition)), len(self.labels))
 
 
 def segment(mesh, progress=None, self_intersections=False):

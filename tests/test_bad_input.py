@@ -74,7 +74,7 @@ def test_real_units_still_work(scale, offset):
     V, F = shapes.icosphere(subdivisions=3)
     reference = segment(V, F)
     seg = segment(V * scale + offset, F)
-    assert seg.n_features == reference.n_features
+    assert seg.n_patches == reference.n_patches
     assert seg.mesh_check["shells"] == 1 and seg.mesh_check["flipped_faces_repaired"] == 0
 
 
@@ -148,9 +148,9 @@ def test_flipped_triangles_are_reoriented_before_curvature(bracket):
     assert check["flipped_faces_repaired"] == len(which)      # closed: outward wins, not the majority
     assert check["nonorientable_shells"] == 0
     assert np.array_equal(flipped.labels, clean.labels)
-    assert [f["kind"] for f in flipped.features] == [f["kind"] for f in clean.features]
-    assert np.allclose([f["mean_curvature"] for f in flipped.features],
-                       [f["mean_curvature"] for f in clean.features])
+    assert [f["kind"] for f in flipped.patches] == [f["kind"] for f in clean.patches]
+    assert np.allclose([f["mean_curvature"] for f in flipped.patches],
+                       [f["mean_curvature"] for f in clean.patches])
     # Inside out as a whole: every face turned back, the shell counted as turned outward.
     inside_out = segment(V, F[:, [0, 2, 1]])
     assert inside_out.mesh_check["flipped_faces_repaired"] == len(F)
@@ -220,7 +220,7 @@ def test_meshes_beyond_the_memory_available_are_refused(monkeypatch):
     with pytest.raises(idealize.MeshError, match=r"1280 triangles: processing it needs about .* GB of memory"):
         idealize.segment(idealize.Mesh(V, F))
     monkeypatch.setattr(mesh_module, "available_memory", lambda: 2 * mesh_module.BASE_BYTES)
-    assert idealize.segment(idealize.Mesh(V, F)).n_features >= 1
+    assert idealize.segment(idealize.Mesh(V, F)).n_patches >= 1
     # 5.5 million triangles fit into 8 GB (measured peak 3.56 GB), 20 million do not.
     mesh_module.check_size(5_500_000, available=8e9)
     with pytest.raises(idealize.MeshError, match="decimate"):

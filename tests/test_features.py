@@ -940,8 +940,8 @@ def test_strips_along_sharp_edges_dissolve_into_the_faces_beside_them():
     spacing = np.mean(np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1))
     strip = np.hypot(centroids[:, 0] - 30, centroids[:, 2] - 10) < spacing  # along the edge x = 30, z = 10
     labels[strip] = labels.max() + 1
-    mean = [p["mean_curvature"] for p in segmentation.features] + [1.0 / spacing]
-    gaussian = [p["mean_gaussian"] for p in segmentation.features] + [0.0]
+    mean = [p["mean_curvature"] for p in segmentation.patches] + [1.0 / spacing]
+    gaussian = [p["mean_gaussian"] for p in segmentation.patches] + [0.0]
     low, high = segmentation.zero_mean_curvature
     result = native.identify_features(V, segmentation.oriented_faces(F), labels.astype(np.int32), mean, gaussian,
                                       low, high, angle_tolerance_degrees=5.0, distance_tolerance=0.0,

@@ -62,7 +62,7 @@ def test_scan_like_mesh_finds_every_face(bracket_scan):
     areas = shapes.triangle_areas(V, F)
     assert correct_faces(seg.labels, gt, areas) == 11
     assert correct_faces(seg.labels, gt, areas, share=0.8, purity=0.95) == 11
-    assert len(seg.features) == 11
+    assert len(seg.patches) == 11
     # Transition strips are one triangle wide: a small share of the surface, all folded into patches.
     assert 0.0 < areas[seg.transition].sum() < 0.12 * areas.sum()
     assert (seg.labels >= 0).all()
@@ -77,7 +77,7 @@ def test_noisy_scan_like_mesh(bracket_scan):
     areas = shapes.triangle_areas(noisy, F)
     assert correct_faces(seg.labels, gt, areas) >= 8
     assert correct_faces(seg.labels, gt, areas, share=0.75, purity=0.9) == 11
-    assert len(seg.features) == 11
+    assert len(seg.patches) == 11
 
 
 def test_labels_and_features_agree(bracket_scan):
@@ -86,11 +86,11 @@ def test_labels_and_features_agree(bracket_scan):
     assert seg.labels.dtype == np.int32 and seg.labels.shape == (len(F),)
     assert seg.labels.min() >= -1
     assert seg.transition.dtype == bool and seg.transition.shape == (len(F),)
-    ids = [f["id"] for f in seg.features]
+    ids = [f["id"] for f in seg.patches]
     assert ids == list(range(len(ids)))
     counts = np.bincount(seg.labels[seg.labels >= 0], minlength=len(ids))
-    assert [f["triangles"] for f in seg.features] == counts.tolist()
-    assert all(f["kind"] in ("smooth", "sharp_convex", "sharp_concave") for f in seg.features)
+    assert [f["triangles"] for f in seg.patches] == counts.tolist()
+    assert all(f["kind"] in ("smooth", "sharp_convex", "sharp_concave") for f in seg.patches)
 
 
 def test_deterministic(bracket_scan):
@@ -98,7 +98,7 @@ def test_deterministic(bracket_scan):
     first = idealize.segment(idealize.Mesh(V, F))
     second = idealize.segment(idealize.Mesh(V.copy(), F.copy()))
     assert np.array_equal(first.labels, second.labels)
-    assert first.features == second.features
+    assert first.patches == second.patches
 
 
 def test_plain_box_from_twelve_triangles():

@@ -158,7 +158,7 @@ class SegmentCommand(_MeshCommand):
 
         def describe(segmentation, seconds):
             return ("Idealize: %s split into %d patches (%d transition triangles) in %.2f s" % (
-                source.Label, segmentation.n_features, int(segmentation.transition.sum()), seconds), [])
+                source.Label, segmentation.n_patches, int(segmentation.transition.sum()), seconds), [])
 
         def make_result(doc, segmentation):
             obj = freecad_mesh.make_segmented_mesh(doc, source, segmentation)
