@@ -429,7 +429,11 @@ def run_gui(driver, config, tmp_path, timeout=240):
     return result
 
 
-def test_segment_command_in_freecad_gui(tmp_path):
+@pytest.fixture(scope="module")
+def gui_result(tmp_path_factory):
+    """One run of the driver in FreeCAD's GUI; the tests below each check a part of what it saw, so
+    that one failure does not hide the rest."""
+    tmp_path = tmp_path_factory.mktemp("gui")
     assert os.path.exists(SHARED_MESH), "the shared test data must sit beside the repository: %s" % SHARED_MESH
     config = {"screenshot": str(tmp_path / "segment-gui.png"),
               "screenshot_types": str(tmp_path / "idealize-gui.png"),
@@ -439,12 +443,23 @@ def test_segment_command_in_freecad_gui(tmp_path):
               "screenshot_solid": str(tmp_path / "solid-gui.png"), "step": str(tmp_path / "part.step")}
     result = run_gui(DRIVER, config, tmp_path)
     print(json.dumps(result, indent=1))
+    return result
 
+
+def test_the_workbench_loads_from_this_checkout(gui_result):
+    """FreeCAD lists the workbench, activates it, and imports idealize from this repository."""
+    result = gui_result
     assert "exception" not in result, result["exception"]
     assert "IdealizeWorkbench" in result["workbenches"], "FreeCAD does not list the workbench"
     assert result["active_workbench"] == "IdealizeWorkbench"
     assert result["idealize_file"].startswith(os.path.realpath(REPO) + os.sep)
 
+
+def test_segment_command(gui_result):
+    """Segment adds a coloured copy in one undo step, leaves the source as it was, and nothing
+    selected."""
+    result = gui_result
+    assert "exception" not in result, result["exception"]
     assert result["active_without_selection"] is False
     assert result["active_with_selection"] is True
     assert result["new_labels"] == ["Part_Segmented"]
@@ -467,6 +482,11 @@ def test_segment_command_in_freecad_gui(tmp_path):
     assert result["objects_after_undo"] == ["Part"]
     assert result["source_visible_after_undo"] is True
 
+
+def test_segment_and_idealize_makes_a_feature_layer(gui_result):
+    """Segment & Idealize: the layer, its colours by type, feature and deviation, undo and redo."""
+    result = gui_result
+    assert "exception" not in result, result["exception"]
     # Box with a hole: a feature layer with 6 planes (light green) and the hole's cylinder (yellow).
     assert result["idealize_labels"] == ["Part_Layer"]
     assert result["idealize_undo_name"] == "Segment and idealize mesh"
@@ -489,6 +509,11 @@ def test_segment_command_in_freecad_gui(tmp_path):
     assert result["hue_deviation"] in (210, 240), result["hue_deviation"]
     assert result["legend_shown"] is True and result["legend_after_type"] is False
 
+
+def test_task_panel(gui_result):
+    """The layer's task panel: its table, summary, highlight and row selection."""
+    result = gui_result
+    assert "exception" not in result, result["exception"]
     panel = result["panel"]
     assert panel["rows"] == 7 and panel["columns"] == 3 and panel["types"] == ["cylinder", "plane"]
     assert panel["options_hidden"] is True and result["options_shown"] is True
@@ -499,8 +524,14 @@ def test_segment_command_in_freecad_gui(tmp_path):
                                    "other": result["source_before"][1] - highlight["cylinder_facets"]}
     assert result["row_of_facet"][0] == result["row_of_facet"][1]
     assert result["panel_closed"] is True
-    assert result["colors_after_panel"] == colors
+    assert result["colors_after_panel"] == result["idealize_type_colors"]
 
+
+def test_layer_saves_reopens_and_recomputes(gui_result):
+    """The layer as a document object: make_solid takes it, it survives save and reopen, and
+    recomputes when its source moves."""
+    result = gui_result
+    assert "exception" not in result, result["exception"]
     assert result["api_solid"] == [True, 7]
     reopened = result["reopened"]
     assert reopened == {"labels": True, "table": True, "colors": True, "proxy": "FeatureLayerObject",
@@ -512,15 +543,31 @@ def test_segment_command_in_freecad_gui(tmp_path):
     assert recomputed["labels"] == result["source_before"][1]
     assert result["objects_after_idealize"] == ["Part"]
 
+
+def test_a_real_mesh_gets_a_layer(gui_result):
+    """A real remeshed CAD part read as a user would (File > Import) gets its layer."""
+    result = gui_result
+    assert "exception" not in result, result["exception"]
     shared = result["shared"]
     assert shared["labels"] == shared["facets"] > 20000 and shared["features"] >= 5
     assert {"plane", "cylinder"} <= set(shared["types"]), shared
 
+
+def test_cancel_leaves_the_document_as_it_was(gui_result):
+    """Cancel during a long run: a progress dialog, nothing added, no undo step."""
+    result = gui_result
+    assert "exception" not in result, result["exception"]
     cancel = result["cancel"]
     assert cancel["visible"] is True, "no progress dialog during a long run"
     assert cancel["new"] == [] and cancel["undo_added"] == 0
     assert "cancelled" in cancel["status"]
 
+
+def test_make_solid_and_export_step(gui_result):
+    """Make B-rep solid: a valid coloured solid with its primitives in one undo step, exported to
+    STEP."""
+    result = gui_result
+    assert "exception" not in result, result["exception"]
     # The fitted solid: 7 faces, exact volume, coloured, with 7 primitives; one undo removes all.
     assert {"Part_Solid", "Part_Primitives"} <= set(result["solid_labels"])
     assert result["solid_undo_name"] == "Make B-rep solid"
@@ -533,6 +580,12 @@ def test_segment_command_in_freecad_gui(tmp_path):
     assert result["step"] == {"solids": 1, "faces": 7, "valid": True}
     assert result["objects_after_solid_undo"] == ["Part"]
 
+
+def test_bad_input_gives_clear_errors_and_no_undo_step(gui_result):
+    """Bad meshes: a message naming the problem, no object and no undo step; repairable ones
+    work."""
+    result = gui_result
+    assert "exception" not in result, result["exception"]
     bad = result["bad_input"]
     for name, words in (("nan", "NaN"), ("collapsed", "collapsed"), ("far_from_origin", "origin")):
         assert bad[name]["new"] == 0 and bad[name]["undo_added"] == 0, (name, bad[name])
