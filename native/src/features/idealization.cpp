@@ -3,6 +3,8 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 #include <array>
 #include <cmath>
 
@@ -578,6 +580,12 @@ void tori_on_plane_and_wall(std::vector<Feature>& features, const std::vector<Fe
 
 int idealize_features(std::vector<Feature>& features, const std::vector<FeatureRelation>& relations,
                       const IdealizationOptions& options) {
+  // Points of another layer (or of none) would refit profiles to the wrong feature, or to nothing,
+  // without a sound: one set per feature or none.
+  if (options.points && options.points->size() != features.size())
+    throw std::invalid_argument("idealization needs the points of every feature (" +
+                                std::to_string(options.points->size()) + " sets for " +
+                                std::to_string(features.size()) + " features)");
   const std::vector<Feature> before = features;
   const double angle = options.angle_tolerance_degrees * M_PI / 180.0;
   const double cos_tolerance = std::cos(angle);

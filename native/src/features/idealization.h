@@ -29,7 +29,8 @@ struct IdealizationOptions {
   double distance_tolerance = 0.0;       // model units; must be set (the layer's tolerance)
   bool snap_to_frame = true;             // snap directions to the part's ideal directions
   std::vector<int> unsnapped;            // features (ids) whose directions stay as fitted
-  // The points of each feature (by id), or null: then a cylinder or cone whose axis the directions
+  // The points of each feature (by id; one set per feature, else idealize_features throws
+  // std::invalid_argument), or null: then a cylinder or cone whose axis the directions
   // and coaxial groups moved keeps its fitted profile; with them its profile is fitted again about
   // the ideal axis (the thesis's semi-defined features, 4.3: a narrow chamfer cone's fitted
   // half-angle is off by as much as its tilt allows); related tori are refitted only with them.
