@@ -16,6 +16,8 @@ a 30 s watchdog only keeps a cancel that is ignored from hanging the test).
 import json
 import os
 
+import pytest
+
 import test_gui as gui
 from test_progress import BREP_STAGES
 
@@ -129,7 +131,11 @@ def run():
 '''
 
 
-def test_cancel_at_each_brep_stage(tmp_path):
+@pytest.fixture(scope="module")
+def cancel_runs(tmp_path_factory):
+    """One run of the driver: Make B-rep solid cancelled at each stage, and run to the end before
+    and after. The tests below each check a part of it, so that one failure does not hide the rest."""
+    tmp_path = tmp_path_factory.mktemp("cancel")
     assert os.path.exists(MESH), "the shared test data must sit beside the repository: %s" % MESH
     config = {"mesh": MESH, "stages": STAGES, "title": TITLE, "watchdog": WATCHDOG}
     result = gui.run_gui(DRIVER, config, tmp_path, timeout=300)
@@ -139,7 +145,12 @@ def test_cancel_at_each_brep_stage(tmp_path):
     for stage in STAGES:
         run = runs.get(stage, {})
         print("  %-14s %s" % (stage, run["cancel_to_return"] if run.get("caught") else "not caught"))
+    return result
 
+
+def test_cancel_is_honoured_in_most_stages(cancel_runs):
+    """The command returns after every Cancel, and Cancel caught the run in most stages."""
+    result, runs = cancel_runs, cancel_runs.get("runs", {})
     assert "hung" not in result, "Cancel ignored: the command did not return %.0f s after it: %s" % (
         WATCHDOG, result["hung"])
     assert "exception" not in result, result["exception"]
@@ -147,20 +158,27 @@ def test_cancel_at_each_brep_stage(tmp_path):
     assert set(runs) == set(STAGES), runs.keys()
     caught = [stage for stage in STAGES if runs[stage]["caught"]]
     assert len(caught) >= MIN_CAUGHT, "only %s caught of %s" % (caught, STAGES)
-    for stage in STAGES:
-        run = runs[stage]
-        assert any(text.startswith(TITLE + ": ") for text in run["labels"]), run  # the dialog was seen
-        assert "Traceback" not in run["report"] and run["error_boxes"] == [], (stage, run)
-        if not run["caught"]:
-            assert run.get("names_after_undo") == [], (stage, run)  # its solid was undone
-            continue
-        # Cancelled: the command returned, nothing added or removed, no undo step, a calm message.
-        assert run["added"] == [] and run["removed"] == [] and run["undo_added"] == 0, (stage, run)
-        assert "cancelled" in run["report"] and "cancelled" in run["status"], (stage, run)
-        assert "cancel_to_return" in run, run
-    # Runs without Cancel, before and after the cancelled ones: each adds its solid and its
-    # primitives in one undo step, and the one after makes the same solid as the one before.
-    first, final = result["first"], result["final"]
+
+
+@pytest.mark.parametrize("stage", STAGES)
+def test_cancel_in_a_stage_leaves_the_document_as_it_was(cancel_runs, stage):
+    """Cancelled: the command returned, nothing added or removed, no undo step, a calm message; a
+    run Cancel came too late for made its solid, which undo removed."""
+    run = cancel_runs["runs"][stage]
+    assert any(text.startswith(TITLE + ": ") for text in run["labels"]), run  # the dialog was seen
+    assert "Traceback" not in run["report"] and run["error_boxes"] == [], (stage, run)
+    if not run["caught"]:
+        assert run.get("names_after_undo") == [], (stage, run)  # its solid was undone
+        return
+    assert run["added"] == [] and run["removed"] == [] and run["undo_added"] == 0, (stage, run)
+    assert "cancelled" in run["report"] and "cancelled" in run["status"], (stage, run)
+    assert "cancel_to_return" in run, run
+
+
+def test_runs_without_cancel_before_and_after_make_the_same_solid(cancel_runs):
+    """Runs without Cancel, before and after the cancelled ones: each adds its solid and its
+    primitives in one undo step, and the one after makes the same solid as the one before."""
+    first, final = cancel_runs["first"], cancel_runs["final"]
     for run in (first, final):
         assert not run["caught"] and run["error_boxes"] == [] and "Traceback" not in run["report"], run
         assert any(n.endswith("_Solid") for n in run["added"]), run

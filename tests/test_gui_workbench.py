@@ -17,6 +17,8 @@ shows them.
 import json
 import os
 
+import pytest
+
 import test_gui as gui
 
 MESH = os.path.join(os.path.dirname(gui.REPO), "shared", "data", "mesh", "fandisk.obj")
@@ -299,23 +301,39 @@ def run():
 '''
 
 
-def test_what_a_new_user_runs_into(tmp_path):
+@pytest.fixture(scope="module")
+def new_user(tmp_path_factory):
+    """One run of what a new user does in FreeCAD's window; the tests below each check a part of
+    what it saw, so that one failure does not hide the rest."""
+    tmp_path = tmp_path_factory.mktemp("workbench")
     assert os.path.exists(MESH), "the shared test data must sit beside the repository: %s" % MESH
     config = {"mesh": MESH, "fcstd": str(tmp_path / "reopen.FCStd")}
     for key in ("preferences", "deviation", "panel", "reopened", "reopened_segmented"):
         config["screenshot_" + key] = str(tmp_path / ("%s.png" % key))
     result = gui.run_gui(DRIVER, config, tmp_path)
     print(json.dumps(result, indent=1))
+    return result
+
+
+def test_the_preferences_page_is_listed_with_its_icon(new_user):
+    """The preferences page of the workbench."""
+    result = new_user
     assert "exception" not in result, result["exception"]
     assert result["error_boxes"] == []
-    labels = result["labels"]
-
     # The preferences page is listed, and FreeCAD finds its icon (a missing one still shows as a
     # placeholder: the report view's warning is what tells).
     preferences = result["preferences"]
     assert preferences["page_listed"], preferences
     assert "Cannot find icon" not in preferences["report"], preferences["report"]
 
+
+def test_commands_leave_the_view_clear_and_the_legend_explains(new_user):
+    """After a command nothing is selected and the source is hidden; the
+    deviation map has its legend."""
+    result = new_user
+    assert "exception" not in result, result["exception"]
+    assert result["error_boxes"] == []
+    labels = result["labels"]
     # Nothing selected after a command; Segment & Idealize hid the source and the earlier copy.
     runs = result["selected_after"]
     assert runs["Idealize_Segment"] == [[1, []]] and runs["Idealize_SegmentIdealize"] == [[1, []]], runs
@@ -326,6 +344,12 @@ def test_what_a_new_user_runs_into(tmp_path):
     assert deviation["entries"] == ["freeform"]
     assert all(abs(c - 153) <= 2 for c in deviation["swatch"]), deviation["swatch"]
 
+
+def test_the_task_panel_fits_and_zooms_to_a_feature(new_user):
+    """The task panel fits the combo view; a double-click zooms to the feature."""
+    result = new_user
+    assert "exception" not in result, result["exception"]
+    assert result["error_boxes"] == []
     # The panel in the default combo view, options shown: everything within the visible width,
     # all columns without scrolling, and narrow enough for 400 px.
     fit = result["panel_fit"]
@@ -348,6 +372,13 @@ def test_what_a_new_user_runs_into(tmp_path):
     assert zoom["details"].startswith("Feature %d, cylinder" % zoom["feature"])
     assert zoom["selected_after_close"] == []
 
+
+def test_an_option_change_recomputes_behind_a_cancellable_dialog(new_user):
+    """An option change recomputes behind the progress dialog: Cancel keeps the
+    layer, a run to the end is one undo step."""
+    result = new_user
+    assert "exception" not in result, result["exception"]
+    assert result["error_boxes"] == []
     # The option change's recompute: progress shown, Cancel honoured (the run stopped: the layer
     # keeps its result and is marked for a recompute), without an error or a traceback; undoing
     # the change makes it up to date again. (How soon it returns is the benchmark's to measure, on a
@@ -363,6 +394,13 @@ def test_what_a_new_user_runs_into(tmp_path):
     assert "shown_after" in done and done["state"] == ["Up-to-date"] and done["changed"] is True, done
     assert done["undo_added"] == 1 and done["undone"] is True, done
 
+
+def test_the_document_reopens_as_it_was_saved(new_user):
+    """Reopened: no traceback, not modified, the colours as saved."""
+    result = new_user
+    assert "exception" not in result, result["exception"]
+    assert result["error_boxes"] == []
+    labels = result["labels"]
     # Reopened: no traceback, not modified, the layer in the type colours (light green planes and
     # spheres: hue 120; yellow cylinders: hue 60) and the copy in its patch colours.
     reopened = result["reopened"]
