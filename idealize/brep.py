@@ -148,12 +148,11 @@ def _make_solid(layer, tolerance, progress):
     types = [f["type"] for f in layer.features]
     params = [dict(f["params"]) for f in layer.features]
     # The triangles with the segmentation's orientation repair.
-    # What the layer decided about the mesh and the angle tolerance it used (a layer stored without
-    # them: the B-rep judges the kind from the fit, and takes the default angle).
-    angle = getattr(layer, "angle_tolerance", None)
+    # What the layer decided about the mesh and the angle tolerance it used (None for a layer stored
+    # without them: the B-rep judges the kind from the fit, and takes the default angle).
     brep = native.build_brep(mesh.vertices, layer.oriented_faces, np.asarray(layer.labels, dtype=np.int32),
-                             types, params, tolerance, progress=progress, mesh_kind=getattr(layer, "mesh_kind", None),
-                             **({} if angle is None else {"angle_tolerance": float(angle)}))
+                             types, params, tolerance, progress=progress, mesh_kind=layer.mesh_kind,
+                             angle_tolerance=layer.angle_tolerance)
     timings = dict(brep.timings)
     timings["brep"] = time.perf_counter() - start_time
     start_time = time.perf_counter()

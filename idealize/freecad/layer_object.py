@@ -359,16 +359,13 @@ def _compact_storage(obj):
 def restore_compact(obj):
     """Rebuilds Labels from its packed copy after the document was read; a layer saved by a version
     that stored the list keeps it, and is packed from now on."""
-    for name, data, dtype in _PACKED:
-        text = getattr(obj, data, "")
-        if text:
-            values = unpacked(text, dtype)
-            setattr(obj, name, values.tolist())
-        elif hasattr(obj, name):
-            values = getattr(obj, name)
-            _compact_storage(obj)
-            setattr(obj, data, packed(values, dtype))
+    stored_as_list = {name: not getattr(obj, data, "") for name, data, _ in _PACKED}
     _compact_storage(obj)
+    for name, data, dtype in _PACKED:
+        if not stored_as_list[name]:
+            setattr(obj, name, unpacked(getattr(obj, data), dtype).tolist())
+        elif hasattr(obj, name):
+            setattr(obj, data, packed(getattr(obj, name), dtype))
 
 
 def color_mode(obj):

@@ -436,7 +436,7 @@ PYBIND11_MODULE(_native, m) {
       "build_brep",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, std::vector<int> labels,
          const std::vector<std::string>& types, const std::vector<py::dict>& params, double tolerance,
-         Progress* progress, std::optional<std::string> mesh_kind, double angle_tolerance) {
+         Progress* progress, std::optional<std::string> mesh_kind, std::optional<double> angle_tolerance) {
         if (types.size() != params.size()) throw std::invalid_argument("one type and one parameter set per feature");
         std::vector<Surface> surfaces;
         for (size_t i = 0; i < types.size(); ++i) surfaces.push_back(surface_from_params(types[i], params[i]));
@@ -449,9 +449,11 @@ PYBIND11_MODULE(_native, m) {
           else if (*mesh_kind == "measured surface") options.mesh_kind = MeshKind::MeasuredSurface;
           else throw std::invalid_argument("mesh_kind is \"exact tessellation\" or \"measured surface\", not \"" + *mesh_kind + "\"");
         }
-        if (!(angle_tolerance > 0.0 && angle_tolerance < 90.0))
-          throw std::invalid_argument("the angle tolerance must lie between 0 and 90 degrees");
-        options.angle_tolerance_degrees = angle_tolerance;
+        if (angle_tolerance) {
+          if (!(*angle_tolerance > 0.0 && *angle_tolerance < 90.0))
+            throw std::invalid_argument("the angle tolerance must lie between 0 and 90 degrees");
+          options.angle_tolerance_degrees = *angle_tolerance;
+        }
         BrepResult result;
         {
           py::gil_scoped_release release;
@@ -461,10 +463,10 @@ PYBIND11_MODULE(_native, m) {
       },
       py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("tolerance") = 0.0,
       py::kw_only(), py::arg("progress") = nullptr, py::arg("mesh_kind") = py::none(),
-      py::arg("angle_tolerance") = BrepOptions{}.angle_tolerance_degrees,
+      py::arg("angle_tolerance") = py::none(),
       "Fitted B-rep of a labelled mesh whose features lie on the given surfaces. mesh_kind: the feature "
       "layer's (\"exact tessellation\" or \"measured surface\"; None: judged from the fit); angle_tolerance: "
-      "the layer's, in degrees.");
+      "the layer's, in degrees (None: the default).");
 
   m.def(
       "mesh_distances",

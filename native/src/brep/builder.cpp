@@ -54,39 +54,45 @@ std::vector<int> BrepBuilder::merge_same_surfaces(const std::vector<int>& labels
 // triangles go back to the features on either side (the thesis folds transition strips into the
 // neighbouring patches). A fillet of such a radius across several facets stays (a scanned
 // hexagon nut: r 1 on edges of 0.6, two edges wide). An exact CAD tessellation keeps every feature.
+// For a layer stored without its mesh kind: an exact tessellation is one where half or more of the
+// features fit exactly (a CAD export's vertices may lie on a B-spline approximation of its tori, a
+// few thousandths of the tolerance off the ideal surface; or be rounded to single precision far
+// from the origin).
+bool BrepBuilder::most_features_exact(const TriangleMesh& mesh, const std::vector<int>& labels) const {
+  const int features = static_cast<int>(surfaces_.size());
+  std::vector<double> squared(features, 0.0), count(features, 0.0);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (labels[f] < 0 || surfaces_[labels[f]].type == SurfaceType::Freeform) continue;
+    for (int c = 0; c < 3; ++c) {
+      const double d = signed_distance(surfaces_[labels[f]], mesh.V.row(mesh.F(f, c)).transpose());
+      squared[labels[f]] += d * d;
+      count[labels[f]] += 1;
+    }
+  }
+  const double exact_rms = std::max(kExactFraction * tol_, 2.0 * coordinate_floor(mesh));
+  int exact = 0, fitted = 0;
+  for (int i = 0; i < features; ++i) {
+    if (count[i] == 0) continue;
+    ++fitted;
+    exact += std::sqrt(squared[i] / count[i]) < exact_rms;
+  }
+  return 2 * exact >= fitted;
+}
+
 std::vector<int> BrepBuilder::dissolve_sampling_blends(const TriangleMesh& mesh, const MeshTopology& topology,
                                                        std::vector<int> labels) const {
   const int features = static_cast<int>(surfaces_.size());
-  std::vector<double> squared(features, 0.0), count(features, 0.0);
   std::vector<double> edges, shortest(mesh.num_faces());
   for (int f = 0; f < mesh.num_faces(); ++f) {
     shortest[f] = std::numeric_limits<double>::infinity();
     for (int c = 0; c < 3; ++c) {
       edges.push_back((mesh.V.row(mesh.F(f, c)) - mesh.V.row(mesh.F(f, (c + 1) % 3))).norm());
       shortest[f] = std::min(shortest[f], edges.back());
-      if (labels[f] < 0 || surfaces_[labels[f]].type == SurfaceType::Freeform) continue;
-      const double d = signed_distance(surfaces_[labels[f]], mesh.V.row(mesh.F(f, c)).transpose());
-      squared[labels[f]] += d * d;
-      count[labels[f]] += 1;
     }
   }
   if (edges.empty()) return labels;
-  // An exact tessellation keeps every feature: as the feature layer decided it, or, for a layer
-  // stored without its decision, where half or more of the features fit exactly (a CAD export's
-  // vertices may lie on a B-spline approximation of its tori, a few thousandths of the tolerance
-  // off the ideal surface; or be rounded to single precision far from the origin).
-  if (mesh_kind_) {
-    if (*mesh_kind_ == MeshKind::ExactTessellation) return labels;
-  } else {
-    const double exact_rms = std::max(kExactFraction * tol_, 2.0 * coordinate_floor(mesh));
-    int exact = 0, fitted = 0;
-    for (int i = 0; i < features; ++i) {
-      if (count[i] == 0) continue;
-      ++fitted;
-      exact += std::sqrt(squared[i] / count[i]) < exact_rms;
-    }
-    if (2 * exact >= fitted) return labels;
-  }
+  // An exact tessellation keeps every feature, as the feature layer decided it.
+  if (mesh_kind_ ? *mesh_kind_ == MeshKind::ExactTessellation : most_features_exact(mesh, labels)) return labels;
   std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
   const double spacing = edges[edges.size() / 2];
   // A scanner samples about evenly in every direction (the benchmark's scans: a typical facet's

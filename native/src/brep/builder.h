@@ -143,6 +143,7 @@ class BrepBuilder {
   std::optional<RoundFace> round_face(int region) const;
   bool split_at_seam(int chain, const Handle(Geom_Curve)& curve, double u0, double u1, const TopoDS_Vertex& v0,
                      const TopoDS_Vertex& v1, double tolerance);
+  bool most_features_exact(const TriangleMesh& mesh, const std::vector<int>& labels) const;
   std::vector<int> dissolve_sampling_blends(const TriangleMesh& mesh, const MeshTopology& topology,
                                             std::vector<int> labels) const;
   std::vector<int> join_explained_regions(std::vector<int> face_feature, BrepResult& result) const;

@@ -1,6 +1,7 @@
 #include "features/edge_fillets.h"
 
 #include "features/section_profile.h"
+#include "fit/fits_as_well.h"
 
 #include <algorithm>
 #include <array>
@@ -406,7 +407,7 @@ std::vector<char> round_edges(const TriangleMesh& mesh, const MeshTopology& topo
     // less the opening).
     const double effective = std::max(independent * n, 2.0);
     if (!(independent * (sharp - rounded) > std::log(effective) * variance) ||
-        rounded_spread(w, *fillet, sample) > options.residual_ratio * spread ||
+        !fits_as_well(rounded_spread(w, *fillet, sample), spread, options.residual_ratio) ||
         fillet->radius * (M_PI - w.opening) < options.shortest_arc * edge)
       continue;
 

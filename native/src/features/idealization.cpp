@@ -1,4 +1,5 @@
 #include "features/idealization.h"
+#include "fit/fits_as_well.h"
 
 #include <Eigen/Dense>
 
@@ -153,7 +154,7 @@ void snap_half_angle(Surface& cone, const FitData& data, const std::vector<Eigen
   double rms, snapped_rms, max_error;
   fit_residuals(cone, data.points, data.weights, rms, max_error);
   fit_residuals(snapped, data.points, data.weights, snapped_rms, max_error);
-  if (snapped_rms <= residual_ratio * rms) cone = snapped;
+  if (fits_as_well(snapped_rms, rms, residual_ratio)) cone = snapped;
 }
 
 // 4b. Pieces of one cone: the coaxial cones that open the same way and whose union one cone
@@ -193,7 +194,7 @@ void one_cone_per_surface(std::vector<Feature>& features, const std::vector<Feat
         const auto explains = [&](int n) {
           double rms, max_error;
           fit_residuals(fit.surface, points[n].points, points[n].weights, rms, max_error);
-          return rms <= residual_ratio * features[n].rms + features[n].spread;
+          return fits_as_well(rms, features[n].rms, residual_ratio, features[n].spread);
         };
         if (!explains(m) || !std::all_of(members.begin(), members.end(), explains)) continue;
         members.push_back(m);

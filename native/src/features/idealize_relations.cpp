@@ -5,6 +5,7 @@
 #include "features/edge_fillets.h"
 #include "features/feature_graph.h"
 #include "features/idealization.h"
+#include "fit/fits_as_well.h"
 
 #include <algorithm>
 #include <cmath>
@@ -42,7 +43,7 @@ void idealize_layer(FeatureState& s) {
     };
     auto misfits = [&](size_t p, double rms) {
       // (The fit's spread: one σ of noise more; then the slack for correlated residuals.)
-      return rms > s.options.residual_ratio * fitted[p].rms + fitted[p].spread + s.floor + ideal_slack;
+      return rms > accepted_residual(fitted[p].rms, s.options.residual_ratio, fitted[p].spread) + s.floor + ideal_slack;
     };
     auto misfit = [&](size_t p, const Surface& surface) { return misfits(p, rms_of(p, surface)); };
     // A direction that snapped to one of the part's ideal ones only by the angle tolerance (a face

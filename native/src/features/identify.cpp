@@ -1,6 +1,7 @@
 // Identification of a patch's surface: the simplest type that fits about as well as the best one,
 // how well a surface explains a face or every point, and the points that fix a fit.
 #include "features/identify.h"
+#include "fit/fits_as_well.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -41,8 +42,9 @@ Feature identify(const PatchPoints& pp, const PatchCurvature& curvature, const E
     }
   }
   // Surfaces that deviate by less than the distance tolerance are as good as equal.
-  const double accepted = options.residual_ratio * best + tolerance;
-  const double accepted_normal = options.residual_ratio * best_normal + options.normal_floor_degrees * M_PI / 180.0;
+  const double accepted = accepted_residual(best, options.residual_ratio, tolerance);
+  const double accepted_normal =
+      accepted_residual(best_normal, options.residual_ratio, options.normal_floor_degrees * M_PI / 180.0);
   // The first accepted type: a more general surface always fits a little better.
   int chosen = -1;
   for (size_t t = curved_only ? 1 : 0; t < fits.size() && chosen < 0; ++t)

@@ -6,6 +6,7 @@
 #include "features/feature_graph.h"
 #include "features/identify.h"
 #include "features/pipeline.h"
+#include "fit/fits_as_well.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -129,7 +130,8 @@ struct PairJudge {
     }
     double rms, max_error;
     fit_residuals(q.larger.surface, q.smaller_points.points, q.smaller_points.weights, rms, max_error);
-    return rms <= options.residual_ratio * std::max(q.smaller.rms, noise) && piece.normal_rms <= q.normal_limit;
+    return fits_as_well(rms, std::max(q.smaller.rms, noise), options.residual_ratio) &&
+           piece.normal_rms <= q.normal_limit;
   }
 
   // Whether surface `u` may stand for both patches of the pair.
@@ -145,7 +147,7 @@ struct PairJudge {
       for (const auto& [part, own] : {std::pair{&q.pa, &q.fa}, std::pair{&q.pb, &q.fb}}) {
         double rms, max_error;
         fit_residuals(u.surface, part->points, part->weights, rms, max_error);
-        if (rms > options.residual_ratio * std::max(own->rms, noise) + tolerance)
+        if (!fits_as_well(rms, std::max(own->rms, noise), options.residual_ratio, tolerance))
           return q.one_plane && u.type == SurfaceType::Plane &&
                  surfaces_meet_at_border(mesh, topology, labels, q.a, q.b, q.fa.surface, q.fb.surface,
                                          std::max(tolerance, q.fa.max_error), std::max(tolerance, q.fb.max_error));
@@ -220,8 +222,8 @@ Judgement PairJudge::judge(int a, int b, const std::set<std::pair<int, int>>& re
          fa.type == fb.type && fa.type != SurfaceType::Freeform, a_larger,
          a_larger ? fa : fb, a_larger ? fb : fa, a_larger ? pa : pb, a_larger ? pb : pa,
          a_larger ? a_small : b_small,
-         options.residual_ratio * std::max(fa.rms, fb.rms) + kExactFraction * tolerance,
-         options.residual_ratio * std::max(fa.normal_rms, fb.normal_rms) + normal_floor, false, false, {}};
+         accepted_residual(std::max(fa.rms, fb.rms), options.residual_ratio, kExactFraction * tolerance),
+         accepted_residual(std::max(fa.normal_rms, fb.normal_rms), options.residual_ratio, normal_floor), false, false, {}};
   if (absorbs(q)) return {Verdict::kAbsorbed, {0.0, a_larger ? a : b, a_larger ? b : a, Feature()}};
   // Two large patches of different types make one surface only on an exact tessellation: a coarse
   // torus falls into bands between its meridians, each of which a cylinder or cone fits exactly.

@@ -1,6 +1,7 @@
 #include "features/profile_splits.h"
 
 #include "features/section_profile.h"
+#include "fit/fits_as_well.h"
 
 #include <algorithm>
 #include <cmath>
@@ -368,7 +369,7 @@ std::vector<char> split_coaxial_steps(const TriangleMesh& mesh, const MeshTopolo
     // or neither do (at a bend; the rim).
     auto near = [&](const Vector2& x, const Vector2& mean, const Vector2& direction) {
       const Vector2 v = x - mean;
-      return std::abs(v.x() * direction.y() - v.y() * direction.x()) <= options.residual_ratio * typical_spread;
+      return fits_as_well(std::abs(v.x() * direction.y() - v.y() * direction.x()), typical_spread, options.residual_ratio);
     };
     const double height = 0.5 * (sample[split - 1].y() + sample[split].y());
     std::vector<int> below, above;
@@ -412,7 +413,7 @@ std::vector<char> split_cornered_tori(const TriangleMesh& mesh, const MeshTopolo
     // (lines placed as the nearest to each point fit a small arc's noise better than the arc does).
     Eigen::Vector3d circle(torus.radius, 0.0, torus.minor);
     const double round = fit_continuation(points, nullptr, circle);
-    if (std::sqrt(round / (n - 3)) <= options.residual_ratio * typical_spread) continue;
+    if (fits_as_well(std::sqrt(round / (n - 3)), typical_spread, options.residual_ratio)) continue;
 
     // Lines along the axis (cylinders) and across it (planes) in turn, each point on the nearest:
     // a corner (one of each) or a step (three). Fitted from the extreme distances and heights of

@@ -7,6 +7,7 @@
 #include "features/identify.h"
 #include "features/pipeline.h"
 #include "features/split.h"
+#include "fit/fits_as_well.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -53,7 +54,7 @@ void make_balls_of_corner_cylinders(const TriangleMesh& mesh, const MeshTopology
     ball.point = centre;
     ball.radius = radius;
     SurfaceFit fit = fit_of(ball, points[f.id]);
-    if (!(fit.rms <= options.residual_ratio * fit_of(f.surface, points[f.id]).rms)) continue;
+    if (!fits_as_well(fit.rms, fit_of(f.surface, points[f.id]).rms, options.residual_ratio)) continue;
     measure_spreads(points[f.id], fit);
     f.set_fit(fit);
   }
@@ -70,7 +71,8 @@ bool join_torus_pieces(const std::vector<PatchPoints>& points, const std::vector
       if (t.type != SurfaceType::Torus || (p.type != SurfaceType::Cylinder && p.type != SurfaceType::Cone)) continue;
       SurfaceFit fit = fit_of(t.surface, points[piece]);
       measure_spreads(points[piece], fit);
-      if (fit.spread > residual_ratio * p.spread || fit.normal_spread > residual_ratio * p.normal_spread + normal_floor)
+      if (!fits_as_well(fit.spread, p.spread, residual_ratio) ||
+          !fits_as_well(fit.normal_spread, p.normal_spread, residual_ratio, normal_floor))
         continue;
       if (join[piece] == kNone || fit.spread < joined_spread[piece]) join[piece] = torus, joined_spread[piece] = fit.spread;
     }
@@ -181,8 +183,8 @@ void classify_features(FeatureState& s) {
       const SurfaceFit about = fit_about_axis(SurfaceType::Cylinder, cone_points[p], f.surface.point, f.surface.axis);
       if (!about.valid) continue;
       const SurfaceFit cylinder = fit_surface(SurfaceType::Cylinder, cone_points[p], s.options.fit, &about.surface);
-      if (cylinder.valid && cylinder.spread <= s.options.residual_ratio * f.spread + s.layer.distance_tolerance &&
-          cylinder.normal_spread <= s.options.residual_ratio * f.normal_spread + normal_floor)
+      if (cylinder.valid && fits_as_well(cylinder.spread, f.spread, s.options.residual_ratio, s.layer.distance_tolerance) &&
+          fits_as_well(cylinder.normal_spread, f.normal_spread, s.options.residual_ratio, normal_floor))
         f.set_fit(cylinder);
     }
   }

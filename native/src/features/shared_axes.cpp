@@ -1,6 +1,7 @@
 #include "features/shared_axes.h"
 
 #include "core/parallel.h"
+#include "fit/fits_as_well.h"
 
 #include <algorithm>
 #include <array>
@@ -65,7 +66,7 @@ SurfaceFit fit_about(const FitData& data, const Axis& axis, const SharedAxisOpti
   if (half_angle < options.angle_tolerance || half_angle > 0.5 * M_PI - options.angle_tolerance) cone.valid = false;
   SurfaceFit simple = cone.valid ? cone : cylinder;
   if (cone.valid && cylinder.valid &&
-      cylinder.rms <= options.residual_ratio * std::min(cylinder.rms, cone.rms) + options.distance_tolerance)
+      fits_as_well(cylinder.rms, std::min(cylinder.rms, cone.rms), options.residual_ratio, options.distance_tolerance))
     simple = cylinder;
   if (!torus || !goes_round(data, axis)) return simple;
   const SurfaceFit ring = fit_about_axis(SurfaceType::Torus, data, axis.origin, axis.direction);
@@ -269,7 +270,7 @@ int fillets_between_planes(const std::vector<FitData>& points, const std::vector
     measure_spreads(data, best);
     measure_spreads(data, own);
     if (strip && (best.spread >= own.spread ||
-                  best.normal_spread > options.residual_ratio * own.normal_spread + options.normal_floor))
+                  !fits_as_well(best.normal_spread, own.normal_spread, options.residual_ratio, options.normal_floor)))
       continue;
     // The radius from the whole arc: the planes beside the strip still hold its flanks, which pull
     // the tangent cylinder's radius short by a few percent. Fitted freely to the strip and the
@@ -292,7 +293,7 @@ int fillets_between_planes(const std::vector<FitData>& points, const std::vector
     } else {
       // A cylinder keeps its own fit unless the placed one fits the whole arc better and its own
       // points about as well (a fillet whose flanks the planes took fits a short radius to what is left).
-      if (!placed.valid || placed.spread > options.residual_ratio * own.spread ||
+      if (!placed.valid || !fits_as_well(placed.spread, own.spread, options.residual_ratio) ||
           fit_of(placed.surface, arc).rms >= fit_of(own.surface, arc).rms)
         continue;
       best = placed;
@@ -332,8 +333,8 @@ int tori_between_planes_and_walls(const std::vector<FitData>& points, const std:
     if (!best.valid) continue;
     measure_spreads(data, best);
     const Feature& own = features[t];
-    if (best.spread > (retype ? 1.0 : options.residual_ratio) * own.spread ||
-        best.normal_spread > options.residual_ratio * own.normal_spread + options.normal_floor)
+    if (!fits_as_well(best.spread, own.spread, retype ? 1.0 : options.residual_ratio) ||
+        !fits_as_well(best.normal_spread, own.normal_spread, options.residual_ratio, options.normal_floor))
       continue;
     features[t].set_fit(best);
     ++changed;
@@ -363,7 +364,7 @@ int planes_on_curved_surfaces(const std::vector<FitData>& points, const SharedAx
     }
     if (!best.valid) continue;
     measure_spreads(data, best);
-    if (best.normal_spread > options.residual_ratio * plane.normal_spread + options.normal_floor ||
+    if (!fits_as_well(best.normal_spread, plane.normal_spread, options.residual_ratio, options.normal_floor) ||
         turn_across(best.surface, data) <= options.angle_tolerance)
       continue;
     features[p].set_fit(best);
@@ -394,7 +395,8 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
     const bool determined = std::any_of(axes.begin(), axes.end(), [&](const Axis& a) { return a.source == f; });
     if (options.only_determined && !determined) return;
     // Candidates by RMS (cheap); the spreads decide for the best one.
-    const double rms_limit = plane ? feature.rms : options.residual_ratio * feature.rms + options.distance_tolerance;
+    const double rms_limit =
+        plane ? feature.rms : accepted_residual(feature.rms, options.residual_ratio, options.distance_tolerance);
     SurfaceFit best;
     for (const Axis& axis : axes) {
       if (axis.source == f) continue;
@@ -415,11 +417,11 @@ int fit_about_shared_axes(const std::vector<FitData>& points, const SharedAxisOp
     }
     measure_spreads(data, best);
     const bool normals_fit =
-        best.normal_spread <= options.residual_ratio * feature.normal_spread + options.normal_floor;
+        fits_as_well(best.normal_spread, feature.normal_spread, options.residual_ratio, options.normal_floor);
     const bool fits = normals_fit && (plane ? best.spread < feature.spread &&
                                                   turn_across(best.surface, data) > options.angle_tolerance
-                                            : best.spread <= options.residual_ratio * feature.spread +
-                                                                 options.distance_tolerance);
+                                            : fits_as_well(best.spread, feature.spread, options.residual_ratio,
+                                                           options.distance_tolerance));
     if (!fits) return;
     feature.set_fit(best);
     changed[f] = 1;
