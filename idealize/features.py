@@ -62,6 +62,9 @@ class FeatureLayer:
         self.mesh_check = segmentation.mesh_check if segmentation is not None else None
         # The input's triangles with the orientation repair applied (the input's own when none).
         self.oriented_faces = segmentation.oriented_faces(mesh.faces) if segmentation is not None else mesh.faces
+        # Per feature: the edge length an edit's remeshing keeps (set by idealize.edit, so that
+        # successive edits keep the first one's density); None for a layer not edited.
+        self.edge_lengths = None
         self.timings = dict(segmentation.timings) if segmentation is not None else {}
         self.timings.update(("features." + name, seconds) for name, seconds in result["timings"])
 

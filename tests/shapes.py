@@ -243,6 +243,26 @@ def cad_export(solid, linear, angular):
     return unique, inverse.reshape(-1)[np.array(facets, np.int64)].astype(np.int32), gt
 
 
+def quality_mesh(solid, max_length):
+    """A mesh of `solid` whose triangles are about `max_length` and well shaped (FreeCAD's Mefisto
+    mesher), its vertices on the solid's faces: a generated part's exact tessellation."""
+    _, _, MeshPart = freecad()
+    mesh = MeshPart.meshFromShape(Shape=solid, MaxLength=float(max_length))
+    points, facets = mesh.Topology
+    return np.array([(p.x, p.y, p.z) for p in points], np.float64), np.array(facets, np.int32)
+
+
+def min_angles(V, F):
+    """The smallest angle of each triangle, in degrees."""
+    corners = [V[F[:, i]] for i in range(3)]
+    angles = []
+    for i in range(3):
+        u, v = corners[(i + 1) % 3] - corners[i], corners[(i + 2) % 3] - corners[i]
+        cos = (u * v).sum(1) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
+        angles.append(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+    return np.min(angles, axis=0)
+
+
 def triangle_areas(V, F):
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)

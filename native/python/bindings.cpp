@@ -12,6 +12,7 @@
 #include "core/progress.h"
 #include "prepare/remesh_cgal.h"
 #include "segment/segmentation.h"
+#include "conversions.h"
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
@@ -117,59 +118,6 @@ py::dict segmentation_dict(Segmentation&& s) {
   return d;
 }
 
-py::dict surface_params(const Surface& s) {
-  using V3 = Eigen::Vector3d;
-  auto list = [](const V3& v) { return py::make_tuple(v.x(), v.y(), v.z()); };
-  py::dict d;
-  switch (s.type) {
-    case SurfaceType::Plane: d["normal"] = list(s.axis); d["point"] = list(s.point); break;
-    case SurfaceType::Cylinder: d["axis"] = list(s.axis); d["point"] = list(s.point); d["radius"] = s.radius; break;
-    case SurfaceType::Cone: d["axis"] = list(s.axis); d["apex"] = list(s.point); d["half_angle"] = s.half_angle; break;
-    case SurfaceType::Sphere: d["center"] = list(s.point); d["radius"] = s.radius; break;
-    case SurfaceType::Torus:
-      d["axis"] = list(s.axis); d["center"] = list(s.point); d["major"] = s.radius; d["minor"] = s.minor;
-      break;
-    case SurfaceType::Freeform: break;
-  }
-  return d;
-}
-
-Eigen::Vector3d vector3(const py::dict& params, const char* key) {
-  if (!params.contains(key)) throw std::invalid_argument(std::string("surface parameters lack '") + key + "'");
-  const auto v = params[key].cast<std::vector<double>>();
-  if (v.size() != 3) throw std::invalid_argument(std::string("surface parameter '") + key + "' needs 3 values");
-  return Eigen::Vector3d(v[0], v[1], v[2]);
-}
-
-double scalar(const py::dict& params, const char* key) {
-  if (!params.contains(key)) throw std::invalid_argument(std::string("surface parameters lack '") + key + "'");
-  return params[key].cast<double>();
-}
-
-// The inverse of surface_params: a surface from the report's type name and parameters.
-Surface surface_from_params(const std::string& type, const py::dict& params) {
-  Surface s;
-  if (type == "plane") {
-    s.type = SurfaceType::Plane; s.axis = vector3(params, "normal").normalized(); s.point = vector3(params, "point");
-  } else if (type == "cylinder") {
-    s.type = SurfaceType::Cylinder; s.axis = vector3(params, "axis").normalized(); s.point = vector3(params, "point");
-    s.radius = scalar(params, "radius");
-  } else if (type == "cone") {
-    s.type = SurfaceType::Cone; s.axis = vector3(params, "axis").normalized(); s.point = vector3(params, "apex");
-    s.half_angle = scalar(params, "half_angle");
-  } else if (type == "sphere") {
-    s.type = SurfaceType::Sphere; s.point = vector3(params, "center"); s.radius = scalar(params, "radius");
-  } else if (type == "torus") {
-    s.type = SurfaceType::Torus; s.axis = vector3(params, "axis").normalized(); s.point = vector3(params, "center");
-    s.radius = scalar(params, "major"); s.minor = scalar(params, "minor");
-  } else if (type != "freeform") {
-    throw std::invalid_argument("unknown surface type '" + type + "'");
-  }
-  if (!s.point.allFinite() || !s.axis.allFinite() || !std::isfinite(s.radius) || !std::isfinite(s.minor))
-    throw std::invalid_argument("a " + type + " has a NaN or infinite parameter");
-  return s;
-}
-
 py::dict feature_layer_dict(FeatureLayer&& layer) {
   py::list features;
   for (const Feature& f : layer.features) {
@@ -244,6 +192,7 @@ PYBIND11_MODULE(_native, m) {
   m.doc() = "Idealize native core: mesh reading, curvature, feature segmentation.";
   py::register_exception<MeshError>(m, "MeshError", PyExc_ValueError);
   py::register_exception<Cancelled>(m, "Cancelled", PyExc_RuntimeError);
+  bind_edit(m);
 
   // Shared between the thread that runs a computation and the one that shows it: every member is
   // atomic, so none of these needs the GIL held by the computing thread.

@@ -1,0 +1,184 @@
+"""Feature-based editing of a feature layer (thesis 6.1): push/pull a face, change a parameter,
+move or rotate features. The edit propagates through the feature graph (tangent fillets roll along
+the faces they join, related features follow the relations kept), the mesh's vertices move onto
+the new surfaces, and adaptive remeshing keeps its triangles well shaped.
+
+Each function returns a new :class:`idealize.FeatureLayer`; the input layer is never modified. An
+edit that no ideal configuration satisfies raises :class:`EditConflict`, naming the features.
+"""
+import time
+
+import numpy as np
+
+from ._loader import native
+from .features import FeatureLayer, as_feature_layer
+from .mesh import Mesh
+
+#: Raised when no ideal configuration satisfies an edit (a fillet larger than its wall, a face
+#: pushed through the one behind it); the message names the features in conflict.
+EditConflict = native.EditConflict
+
+#: The relations an edit can keep; all are kept unless `keep` says otherwise.
+RELATIONS = ("tangent", "coplanar", "coaxial", "concentric", "equal_radius")
+
+# The parameters set_parameter changes, per surface type: the report's name -> the core's.
+_PARAMETERS = {
+    "cylinder": {"radius": "radius"},
+    "sphere": {"radius": "radius"},
+    "torus": {"major": "radius", "minor": "minor_radius"},
+    "cone": {"half_angle": "half_angle"},
+}
+
+
+def push_pull(layer, feature_id, distance, keep=None, remesh=True):
+    """Moves a face along its normal by `distance`: a plane is offset, a round surface's radius
+    (a torus's tube) grows or shrinks. A positive distance moves the face outward, away from the
+    material, so pulling a solid's plane adds material."""
+    return _edit(layer, [feature_id], parameter="offset", value=float(distance), keep=keep, remesh=remesh)
+
+
+def set_parameter(layer, feature_id, name, value, keep=None, remesh=True):
+    """Sets a parameter of a feature: ``radius`` of a cylinder or sphere, ``major`` or ``minor`` of a
+    torus, ``half_angle`` (radians) of a cone, or ``offset`` (as :func:`push_pull`) of any."""
+    layer = as_feature_layer(layer)
+    feature = _feature(layer, feature_id)
+    if name == "offset":
+        return push_pull(layer, feature_id, value, keep=keep, remesh=remesh)
+    names = _PARAMETERS.get(feature["type"], {})
+    if name not in names:
+        raise ValueError("a %s has no parameter %r; it has %s" % (
+            feature["type"], name, ", ".join(["offset"] + sorted(names))))
+    return _edit(layer, [feature_id], parameter=names[name], value=float(value), keep=keep, remesh=remesh)
+
+
+def move(layer, feature_ids, translation, keep=None, remesh=True):
+    """Moves features rigidly by `translation` (3 numbers): a hole across its face, a cone along
+    its axis. Tangent neighbours follow unless `keep` says otherwise."""
+    motion = np.eye(4)
+    motion[:3, 3] = _vector(translation, "translation")
+    return _edit(layer, _ids(feature_ids), motion=motion, keep=keep, remesh=remesh)
+
+
+def rotate(layer, feature_ids, degrees, axis=None, center=None, keep=None, remesh=True):
+    """Rotates features by `degrees` about the line through `center` along `axis`; by default the
+    first feature's own axis (its normal for a plane, through its point)."""
+    layer = as_feature_layer(layer)
+    ids = _ids(feature_ids)
+    params = _feature(layer, ids[0])["params"]
+    if axis is None:
+        axis = params.get("axis", params.get("normal"))
+        if axis is None:
+            raise ValueError("feature %d has no axis of its own: give one" % ids[0])
+    if center is None:
+        center = params.get("point", params.get("center", params.get("apex")))
+    axis = _vector(axis, "axis")
+    if not np.linalg.norm(axis) > 0:
+        raise ValueError("the axis of rotation has no direction")
+    axis = axis / np.linalg.norm(axis)
+    center = _vector(center, "center")
+    angle = np.radians(float(degrees))
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    rotation = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k  # Rodrigues
+    motion = np.eye(4)
+    motion[:3, :3] = rotation
+    motion[:3, 3] = center - rotation @ center
+    return _edit(layer, ids, motion=motion, keep=keep, remesh=remesh)
+
+
+def _vector(value, name):
+    v = np.asarray(value, dtype=np.float64).reshape(-1)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise ValueError("the %s must be 3 finite numbers, got %r" % (name, value))
+    return v
+
+
+def _ids(feature_ids):
+    ids = [int(feature_ids)] if np.isscalar(feature_ids) else [int(f) for f in feature_ids]
+    if not ids:
+        raise ValueError("no feature to edit")
+    return ids
+
+
+def _feature(layer, feature_id):
+    if not 0 <= int(feature_id) < len(layer.features):
+        raise ValueError("the layer has no feature %r (it has %d)" % (feature_id, len(layer.features)))
+    return layer.features[int(feature_id)]
+
+
+def _keep_flags(keep):
+    """{relation: bool} from None (keep all), a dict of flags, or the names of the relations kept."""
+    if keep is None:
+        return {name: True for name in RELATIONS}
+    if isinstance(keep, dict):
+        unknown = set(keep) - set(RELATIONS)
+        flags = {name: bool(keep.get(name, True)) for name in RELATIONS}
+    else:
+        kept = set(keep)
+        unknown = kept - set(RELATIONS)
+        flags = {name: name in kept for name in RELATIONS}
+    if unknown:
+        raise ValueError("unknown relation(s) %s; the relations are %s" % (sorted(unknown), ", ".join(RELATIONS)))
+    return flags
+
+
+def _edit(layer, feature_ids, motion=None, parameter="none", value=0.0, keep=None, remesh=True):
+    layer = as_feature_layer(layer)
+    for f in feature_ids:
+        _feature(layer, f)
+    flags = _keep_flags(keep)
+    start = time.perf_counter()
+    result = native.edit_features(
+        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64),
+        np.ascontiguousarray(layer.oriented_faces, dtype=np.int32),
+        np.asarray(layer.labels, dtype=np.int32),
+        [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features],
+        list(layer.adjacency), [dict(r) for r in layer.relations], feature_ids,
+        motion=np.eye(4) if motion is None else motion, parameter=parameter, value=value, keep=flags,
+        distance_tolerance=float(layer.distance_tolerance), remesh=bool(remesh),
+        target_edge_lengths=list(layer.edge_lengths or []))
+    return _edited_layer(layer, result, flags, time.perf_counter() - start)
+
+
+def _edited_layer(layer, result, flags, seconds):
+    V, F, labels = result["V"], result["F"], result["labels"]
+    changed = result["changed"]
+    deviation = result["vertex_deviation"]
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    areas = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    area = np.bincount(labels, weights=areas, minlength=len(layer.features))
+    triangles = np.bincount(labels, minlength=len(layer.features))
+    # Each feature's residual: its vertices' distances (the nearest of their features').
+    corners = np.nan_to_num(deviation[F], nan=0.0)
+    squared = np.bincount(labels, weights=(corners ** 2).sum(axis=1), minlength=len(layer.features))
+    worst = np.zeros(len(layer.features))
+    np.maximum.at(worst, labels, corners.max(axis=1))
+    features = []
+    for f, params in zip(layer.features, result["params"]):
+        g = dict(f)
+        if f["type"] != "freeform":
+            g["params"] = params
+            g["best_fit"] = (f["type"], params)
+            g["rms"] = float(np.sqrt(squared[f["id"]] / max(3 * triangles[f["id"]], 1)))
+            g["max_error"] = float(worst[f["id"]])
+        g["area"] = float(area[f["id"]])
+        g["triangles"] = int(triangles[f["id"]])
+        features.append(g)
+    # A relation kind the edit did not keep holds no more for the groups it changed.
+    relations = [r for r in layer.relations
+                 if flags.get(r["kind"], True) or not any(changed[m] for m in r["features"])]
+    finite = deviation[np.isfinite(deviation)]
+    edited = {
+        "labels": labels, "features": features, "adjacency": list(layer.adjacency), "relations": relations,
+        "idealized_vertices": V, "vertex_deviation": deviation,
+        "max_deviation": float(finite.max()) if finite.size else 0.0,
+        "rms_deviation": float(np.sqrt(np.mean(finite ** 2))) if finite.size else 0.0,
+        "distance_tolerance": layer.distance_tolerance, "form_deviation": 0.0,
+        # The edited mesh lies on its features, as a CAD export's does.
+        "mesh_kind": "exact tessellation", "angle_tolerance_degrees": layer.angle_tolerance,
+        "noise": 0.0, "normal_noise": 0.0, "timings": [("edit", seconds)],
+    }
+    out = FeatureLayer(Mesh(V, F, source=layer.mesh.source), None, edited)
+    out.changed = [i for i, flag in enumerate(changed) if flag]
+    # The density of the first edit's mesh, which successive edits keep (no drift).
+    out.edge_lengths = list(result["target_edge_lengths"])
+    return out

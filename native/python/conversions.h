@@ -1,0 +1,23 @@
+// Conversions between the native types and the Python report's dictionaries.
+#pragma once
+
+#include "fit/surface.h"
+
+#include <pybind11/pybind11.h>
+
+#include <string>
+
+namespace idealize {
+
+// A surface's parameters as the report gives them: plane normal/point, cylinder axis/point/radius,
+// cone axis/apex/half_angle (radians), sphere center/radius, torus axis/center/major/minor.
+pybind11::dict surface_params(const Surface& s);
+
+// The inverse of surface_params: a surface from the report's type name and parameters. Throws
+// std::invalid_argument for an unknown type, a missing or non-finite parameter.
+Surface surface_from_params(const std::string& type, const pybind11::dict& params);
+
+// Binds the feature-based editing (edit_features) into the module.
+void bind_edit(pybind11::module_& m);
+
+}  // namespace idealize

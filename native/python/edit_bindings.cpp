@@ -1,0 +1,133 @@
+// Bindings of the feature-based editing (native/src/edit).
+#include "conversions.h"
+#include "edit/edit.h"
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace idealize {
+
+namespace py = pybind11;
+
+namespace {
+
+using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using RowMatrixX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+EditParameter parameter_named(const std::string& name) {
+  static const std::map<std::string, EditParameter> names{{"none", EditParameter::None},
+                                                          {"offset", EditParameter::Offset},
+                                                          {"radius", EditParameter::Radius},
+                                                          {"minor_radius", EditParameter::MinorRadius},
+                                                          {"half_angle", EditParameter::HalfAngle}};
+  const auto it = names.find(name);
+  if (it == names.end())
+    throw std::invalid_argument("unknown parameter '" + name + "': offset, radius, minor_radius or half_angle");
+  return it->second;
+}
+
+KeepRelations keep_from(const py::dict& keep) {
+  KeepRelations k;
+  const std::map<std::string, bool*> flags{{"tangent", &k.tangent},
+                                           {"coplanar", &k.coplanar},
+                                           {"coaxial", &k.coaxial},
+                                           {"concentric", &k.concentric},
+                                           {"equal_radius", &k.equal_radius}};
+  for (const auto& [key, value] : keep) {
+    const std::string name = py::str(key);
+    const auto it = flags.find(name);
+    if (it == flags.end())
+      throw std::invalid_argument("unknown relation '" + name +
+                                  "' to keep: tangent, coplanar, coaxial, concentric or equal_radius");
+    *it->second = value.cast<bool>();
+  }
+  return k;
+}
+
+std::vector<FeatureAdjacency> adjacency_from(const std::vector<py::dict>& list) {
+  std::vector<FeatureAdjacency> out;
+  for (const py::dict& d : list) {
+    FeatureAdjacency a;
+    a.a = d["a"].cast<int>();
+    a.b = d["b"].cast<int>();
+    a.continuity = d["continuity"].cast<std::string>() == "G1" ? Continuity::G1 : Continuity::G0;
+    out.push_back(a);
+  }
+  return out;
+}
+
+std::vector<FeatureRelation> relations_from(const std::vector<py::dict>& list) {
+  std::vector<FeatureRelation> out;
+  for (const py::dict& d : list) out.push_back({d["kind"].cast<std::string>(), d["features"].cast<std::vector<int>>()});
+  return out;
+}
+
+}  // namespace
+
+void bind_edit(py::module_& m) {
+  py::register_exception<EditConflict>(m, "EditConflict", PyExc_ValueError);
+  m.def(
+      "edit_features",
+      [](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F, std::vector<int> labels,
+         const std::vector<std::string>& types, const std::vector<py::dict>& params,
+         const std::vector<py::dict>& adjacency, const std::vector<py::dict>& relations, std::vector<int> features,
+         const Eigen::Matrix4d& motion, const std::string& parameter, double value, const py::dict& keep,
+         double distance_tolerance, bool remesh, std::vector<double> target_edge_lengths) {
+        if (types.size() != params.size()) throw std::invalid_argument("one type and one parameter set per feature");
+        std::vector<Surface> surfaces;
+        for (size_t i = 0; i < types.size(); ++i) surfaces.push_back(surface_from_params(types[i], params[i]));
+        TriangleMesh mesh;
+        mesh.V = V;
+        mesh.F = F;
+        FeatureEdit edit;
+        edit.features = std::move(features);
+        edit.motion.matrix() = motion;
+        if (!(motion.bottomRows<1>() - Eigen::RowVector4d(0, 0, 0, 1)).isZero() ||
+            !(motion.topLeftCorner<3, 3>().transpose() * motion.topLeftCorner<3, 3>()).isIdentity(1e-9))
+          throw std::invalid_argument("the motion must be a rigid 4x4 transform (a rotation and a translation)");
+        edit.parameter = parameter_named(parameter);
+        edit.value = value;
+        EditOptions options;
+        options.keep = keep_from(keep);
+        options.distance_tolerance = distance_tolerance;
+        options.remesh = remesh;
+        options.target_edge_lengths = std::move(target_edge_lengths);
+        const std::vector<FeatureAdjacency> graph = adjacency_from(adjacency);
+        const std::vector<FeatureRelation> related = relations_from(relations);
+        EditResult result;
+        {
+          py::gil_scoped_release release;
+          result = edit_features(mesh, labels, surfaces, graph, related, edit, options);
+        }
+        py::list new_params, changed;
+        for (size_t i = 0; i < result.surfaces.size(); ++i) {
+          new_params.append(surface_params(result.surfaces[i]));
+          changed.append(static_cast<bool>(result.changed[i]));
+        }
+        py::dict d;
+        d["V"] = std::move(result.mesh.V);
+        d["F"] = std::move(result.mesh.F);
+        d["labels"] = py::array_t<int>(static_cast<py::ssize_t>(result.labels.size()), result.labels.data());
+        d["params"] = new_params;
+        d["changed"] = changed;
+        d["vertex_deviation"] = std::move(result.vertex_deviation);
+        d["target_edge_lengths"] = std::move(result.target_edge_lengths);
+        return d;
+      },
+      py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("adjacency"),
+      py::arg("relations"), py::arg("features"), py::kw_only(), py::arg("motion") = Eigen::Matrix4d::Identity(),
+      py::arg("parameter") = "none", py::arg("value") = 0.0, py::arg("keep") = py::dict(),
+      py::arg("distance_tolerance") = 0.0, py::arg("remesh") = true, py::arg("target_edge_lengths") = std::vector<double>(),
+      "Feature-based edit of a layer's idealized mesh (V, F oriented, labels, the features' types and params, "
+      "adjacency and relations as the report gives them): `features` move by `motion` (4x4 rigid), then "
+      "`parameter` (offset, radius, minor_radius, half_angle) takes `value`; target_edge_lengths: per feature "
+      "(empty: each feature's own). Returns V, F, labels, params, changed, vertex_deviation and the "
+      "target_edge_lengths used. Raises EditConflict when no ideal configuration satisfies the edit.");
+}
+
+}  // namespace idealize

@@ -1,0 +1,137 @@
+#include "edit/edit.h"
+
+#include "edit/move_vertices.h"
+#include "edit/propagate.h"
+#include "edit/remesh_adaptive.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <set>
+#include <string>
+
+namespace idealize {
+namespace {
+
+void check_layer(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                 const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations) {
+  const int n = static_cast<int>(surfaces.size());
+  if (static_cast<int>(labels.size()) != mesh.num_faces())
+    throw std::invalid_argument("the layer has " + std::to_string(labels.size()) + " labels for " +
+                                std::to_string(mesh.num_faces()) + " triangles");
+  auto valid = [n](int f) { return f >= 0 && f < n; };
+  if (!std::all_of(labels.begin(), labels.end(), valid))
+    throw std::invalid_argument("a triangle's label names no feature of the layer");
+  for (const FeatureAdjacency& a : adjacency)
+    if (!valid(a.a) || !valid(a.b)) throw std::invalid_argument("an adjacency names no feature of the layer");
+  for (const FeatureRelation& r : relations)
+    if (!std::all_of(r.features.begin(), r.features.end(), valid))
+      throw std::invalid_argument("a relation names no feature of the layer");
+}
+
+Eigen::VectorXd vertex_deviation(const TriangleMesh& mesh, const std::vector<int>& labels,
+                                 const std::vector<Surface>& surfaces) {
+  Eigen::VectorXd deviation = Eigen::VectorXd::Constant(mesh.num_vertices(), std::numeric_limits<double>::infinity());
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Surface& s = surfaces[labels[f]];
+    if (s.type == SurfaceType::Freeform) continue;
+    for (int c = 0; c < 3; ++c) {
+      const int v = mesh.F(f, c);
+      deviation(v) = std::min(deviation(v), std::abs(signed_distance(s, mesh.V.row(v).transpose())));
+    }
+  }
+  for (Eigen::Index v = 0; v < deviation.size(); ++v)
+    if (std::isinf(deviation(v))) deviation(v) = std::numeric_limits<double>::quiet_NaN();
+  return deviation;
+}
+
+// The smallest radius of curvature of a surface over the points `at` (infinite for a plane).
+double tightest_radius(const Surface& s, const TriangleMesh& mesh, const std::vector<int>& at) {
+  switch (s.type) {
+    case SurfaceType::Cylinder:
+    case SurfaceType::Sphere: return s.radius;
+    case SurfaceType::Torus: return s.minor;
+    case SurfaceType::Cone: {
+      double tightest = std::numeric_limits<double>::infinity();
+      for (int v : at)
+        tightest = std::min(tightest, axial_coordinates(s.point, s.axis, mesh.V.row(v).transpose()).distance /
+                                          std::cos(s.half_angle));
+      return tightest;
+    }
+    default: return std::numeric_limits<double>::infinity();
+  }
+}
+
+// Each feature's target edge length: the density it has, its own mean edge length, but no longer
+// than keeps its chords as close to a curved surface as its own edges keep them (an edge of length
+// l across a radius r lies l^2 / 8r off it; isotropic remeshing leaves edges up to 4/3 of the
+// target). `given` (per feature, or empty) wins where positive.
+std::vector<double> remeshing_targets(const TriangleMesh& mesh, const std::vector<int>& labels,
+                                      const std::vector<Surface>& surfaces, const std::vector<double>& given) {
+  const size_t n = surfaces.size();
+  auto is_given = [&](size_t l) { return l < given.size() && given[l] > 0.0; };
+  std::vector<std::vector<double>> edges(n);
+  std::vector<double> sagitta(n, 0.0);
+  std::vector<std::vector<int>> corners(n);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int l = labels[f];
+    if (is_given(l)) continue;
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector3d a = mesh.V.row(mesh.F(f, c)), b = mesh.V.row(mesh.F(f, (c + 1) % 3));
+      edges[l].push_back((b - a).norm());
+      sagitta[l] = std::max(sagitta[l], std::abs(signed_distance(surfaces[l], 0.5 * (a + b))));
+      corners[l].push_back(mesh.F(f, c));
+    }
+  }
+  std::vector<double> target(n, 0.0);
+  for (size_t l = 0; l < n; ++l) {
+    if (is_given(l)) target[l] = given[l];
+    if (edges[l].empty()) continue;
+    target[l] = std::accumulate(edges[l].begin(), edges[l].end(), 0.0) / static_cast<double>(edges[l].size());
+    const double radius = tightest_radius(surfaces[l], mesh, corners[l]);
+    if (std::isfinite(radius) && sagitta[l] > 0.0)
+      target[l] = std::min(target[l], 0.75 * std::sqrt(8.0 * radius * sagitta[l]));
+  }
+  return target;
+}
+
+}  // namespace
+
+EditResult edit_features(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                         const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations,
+                         const FeatureEdit& edit, const EditOptions& options) {
+  check_layer(mesh, labels, surfaces, adjacency, relations);
+  const Propagation propagation = propagate_edit(mesh, labels, surfaces, adjacency, relations, edit, options);
+  MovedVertices moved = move_vertices(mesh, labels, adjacency, surfaces, propagation);
+  const std::vector<double> sides = facing_sides(mesh, labels, surfaces);
+  std::vector<char> edited(surfaces.size(), 0);
+  for (int f = 0; f < mesh.num_faces(); ++f) edited[labels[f]] |= moved.region[f] || propagation.changed[labels[f]];
+  EditResult result;
+  result.surfaces = propagation.surfaces;
+  result.changed = propagation.changed;
+  result.mesh.V = std::move(moved.V);
+  result.mesh.F = mesh.F;
+  result.labels = labels;
+  result.target_edge_lengths = remeshing_targets(mesh, labels, surfaces, options.target_edge_lengths);
+  if (!options.remesh || std::none_of(moved.region.begin(), moved.region.end(), [](char r) { return r; })) {
+    refuse_inverted(result.mesh, result.labels, result.surfaces, sides, edited, edit.features);
+    result.vertex_deviation = vertex_deviation(result.mesh, result.labels, result.surfaces);
+    return result;
+  }
+  std::vector<double> kept(surfaces.size(), 0.0);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (moved.region[f]) kept[labels[f]] = result.target_edge_lengths[labels[f]];
+  std::set<std::pair<int, int>> g1;
+  for (const FeatureAdjacency& a : adjacency)
+    if (a.continuity == Continuity::G1) g1.insert({std::min(a.a, a.b), std::max(a.a, a.b)});
+  RemeshedLayer remeshed = remesh_adaptive(result.mesh, result.labels, kept, result.surfaces, g1,
+                                           options.remesh_iterations);
+  result.mesh = std::move(remeshed.mesh);
+  result.labels = std::move(remeshed.labels);
+  refuse_inverted(result.mesh, result.labels, result.surfaces, sides, edited, edit.features);
+  result.vertex_deviation = vertex_deviation(result.mesh, result.labels, result.surfaces);
+  return result;
+}
+
+}  // namespace idealize

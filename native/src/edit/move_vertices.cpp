@@ -1,0 +1,236 @@
+#include "edit/move_vertices.h"
+
+#include "edit/contacts.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/SparseLU>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+
+namespace idealize {
+namespace {
+
+// The features around each vertex, sorted.
+std::vector<std::vector<int>> features_around(const TriangleMesh& mesh, const std::vector<int>& labels) {
+  std::vector<std::vector<int>> around(mesh.num_vertices());
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      auto& a = around[mesh.F(f, c)];
+      if (std::find(a.begin(), a.end(), labels[f]) == a.end()) a.push_back(labels[f]);
+    }
+  for (auto& a : around) std::sort(a.begin(), a.end());
+  return around;
+}
+
+// Gauss-Newton steps of least norm onto the zero sets of `surfaces` (a point on all of them).
+Eigen::Vector3d least_norm_steps(const std::vector<const Surface*>& surfaces, Eigen::Vector3d p, double length) {
+  const int k = static_cast<int>(surfaces.size());
+  if (k == 0) return p;
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    Eigen::MatrixXd J(k, 3);
+    Eigen::VectorXd r(k);
+    for (int i = 0; i < k; ++i) {
+      r(i) = signed_distance(*surfaces[i], p);
+      J.row(i) = surface_normal(*surfaces[i], p).transpose();
+    }
+    // Converged to the rounding of the distances (about 1e-16 of the part).
+    if (r.cwiseAbs().maxCoeff() <= 1e-14 * length) break;
+    // Damped: two surfaces nearly tangent give nearly equal rows; 1e-12 keeps the step finite
+    // and changes a transversal step by 1e-12 of itself.
+    Eigen::MatrixXd A = J * J.transpose();
+    A.diagonal().array() += 1e-12;
+    p -= J.transpose() * A.ldlt().solve(r);
+  }
+  return p;
+}
+
+bool same_shape(const Surface& a, const Surface& b) {
+  return a.radius == b.radius && a.minor == b.minor && a.half_angle == b.half_angle;
+}
+
+// The correction of the free vertices (index >= 0, n_free of them), carried by `carried`, that
+// makes them the harmonic interpolation of their borders' misfit: a border vertex w (in `V`
+// already) pulls a free neighbour v by V(w) - carried(v) * w. A stretched wall's vertices (carried
+// nowhere) spread its moved border over it; a moved feature's vertices follow where its border
+// lands (a fillet moved against a mitre with another). Mean value weights (Floater, "Mean value
+// coordinates", CAGD 2003): positive, and exact for a misfit that varies linearly over a flat
+// region, so that rows of vertices stay in order (uniform weights, blind to spacing, pushed a
+// wall's thin top row past its edge).
+Eigen::MatrixXd harmonic_correction(const TriangleMesh& mesh, const std::vector<int>& index, int n_free,
+                                    const std::vector<Eigen::Isometry3d>& carried, const MatrixX3d& V) {
+  std::vector<std::map<int, double>> weights(n_free);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int i = mesh.F(f, c), j = mesh.F(f, (c + 1) % 3), k = mesh.F(f, (c + 2) % 3);
+      if (index[i] < 0) continue;
+      const Eigen::Vector3d x = mesh.V.row(i), a = mesh.V.row(j).transpose() - x, b = mesh.V.row(k).transpose() - x;
+      const double la = a.norm(), lb = b.norm();
+      if (!(la > 0.0 && lb > 0.0)) continue;
+      const double half = std::tan(0.5 * std::acos(std::clamp(a.dot(b) / (la * lb), -1.0, 1.0)));
+      weights[index[i]][j] += half / la;
+      weights[index[i]][k] += half / lb;
+    }
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_free, 3);
+  for (int v = 0; v < static_cast<int>(index.size()); ++v) {
+    if (index[v] < 0) continue;
+    double total = 0.0;
+    for (const auto& [w, weight] : weights[index[v]]) {
+      total += weight;
+      if (index[w] >= 0) {
+        entries.emplace_back(index[v], index[w], -weight);
+      } else {
+        const Eigen::Vector3d misfit = V.row(w).transpose() - carried[v] * Eigen::Vector3d(mesh.V.row(w).transpose());
+        rhs.row(index[v]) += weight * misfit.transpose();
+      }
+    }
+    // A tiny pull to zero keeps a free region without any border (impossible on a closed mesh,
+    // possible on an open one) determined: 1e-12 of its weights.
+    entries.emplace_back(index[v], index[v], total * (1.0 + 1e-12));
+  }
+  Eigen::SparseMatrix<double> L(n_free, n_free);
+  L.setFromTriplets(entries.begin(), entries.end());
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> solver;
+  solver.compute(L);
+  if (solver.info() != Eigen::Success) throw EditConflict("the edited features' vertices could not be placed");
+  return solver.solve(rhs);
+}
+
+}  // namespace
+
+Eigen::Vector3d onto_features(const std::vector<int>& features, const std::vector<Surface>& surfaces,
+                              const std::set<std::pair<int, int>>& g1, Eigen::Vector3d p, double length) {
+  std::vector<int> analytic;
+  for (int f : features)
+    if (surfaces[f].type != SurfaceType::Freeform) analytic.push_back(f);
+  if (analytic.size() == 1) return closest_point(surfaces[analytic[0]], p);
+  // Tangent pairs: their contact line replaces the two surfaces, whose normals agree along it.
+  std::vector<std::pair<int, int>> contacts;  // roller, other
+  std::vector<char> rolls(analytic.size(), 0);
+  for (size_t i = 0; i < analytic.size(); ++i)
+    for (size_t j = i + 1; j < analytic.size(); ++j) {
+      const int a = analytic[i], b = analytic[j];
+      if (!g1.count({std::min(a, b), std::max(a, b)})) continue;
+      const int roller = roller_of(surfaces[a], a, surfaces[b], b);
+      if (roller < 0) continue;
+      contacts.emplace_back(roller, roller == a ? b : a);
+      rolls[roller == a ? i : j] = 1;
+    }
+  std::vector<const Surface*> rest;
+  for (size_t i = 0; i < analytic.size(); ++i)
+    if (!rolls[i]) rest.push_back(&surfaces[analytic[i]]);
+  if (contacts.empty()) return least_norm_steps(rest, p, length);
+  // Alternating projections onto the contact lines and the other surfaces: they cross
+  // transversally at a corner, where this converges linearly.
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    const Eigen::Vector3d start = p;
+    for (const auto& [roller, other] : contacts) p = contact_point(surfaces[roller], surfaces[other], p);
+    if (rest.size() > 1 || contacts.size() > 1) p = least_norm_steps(rest, p, length);
+    if ((p - start).norm() <= 1e-14 * length) break;
+  }
+  for (const auto& [roller, other] : contacts) p = contact_point(surfaces[roller], surfaces[other], p);
+  return p;
+}
+
+MovedVertices move_vertices(const TriangleMesh& mesh, const std::vector<int>& labels,
+                            const std::vector<FeatureAdjacency>& adjacency, const std::vector<Surface>& before,
+                            const Propagation& propagation) {
+  const std::vector<Surface>& after = propagation.surfaces;
+  const std::vector<char>& changed = propagation.changed;
+  const double length = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
+  // Features that did not change but border one that did stretch with it.
+  std::vector<char> stretch(before.size(), 0);
+  std::set<std::pair<int, int>> g1;
+  for (const FeatureAdjacency& a : adjacency) {
+    if (changed[a.a] && !changed[a.b]) stretch[a.b] = 1;
+    if (changed[a.b] && !changed[a.a]) stretch[a.a] = 1;
+    if (a.continuity == Continuity::G1) g1.insert({std::min(a.a, a.b), std::max(a.a, a.b)});
+  }
+  const std::vector<std::vector<int>> around = features_around(mesh, labels);
+  const int nv = mesh.num_vertices();
+  MovedVertices out;
+  out.V = mesh.V;
+  // Where each vertex goes before the correction: with its feature's motion, or where it is.
+  std::vector<Eigen::Isometry3d> carried(nv, Eigen::Isometry3d::Identity());
+  std::vector<int> index(nv, -1);
+  int n_free = 0;
+  for (int v = 0; v < nv; ++v) {
+    const auto& a = around[v];
+    const Eigen::Vector3d x = mesh.V.row(v).transpose();
+    const bool any_changed = std::any_of(a.begin(), a.end(), [&](int f) { return changed[f]; });
+    if (a.size() == 1 && (changed[a[0]] || stretch[a[0]])) {
+      carried[v] = propagation.motions[a[0]];  // inside an edited feature: free, carried by it
+      index[v] = n_free++;
+    } else if (any_changed) {
+      // On a changed feature's border: each changed feature carries the vertex with its motion onto
+      // its new surface, and the intersection of all its surfaces is searched from their mean.
+      Eigen::Vector3d guess = Eigen::Vector3d::Zero();
+      int count = 0;
+      for (int f : a)
+        if (changed[f]) {
+          guess += closest_point(after[f], propagation.motions[f] * x);
+          ++count;
+        }
+      out.V.row(v) = onto_features(a, after, g1, guess / count, length).transpose();
+    } else if (!a.empty() && std::all_of(a.begin(), a.end(), [&](int f) { return stretch[f]; })) {
+      index[v] = n_free++;  // between stretched features: free, in place
+    }
+  }
+  if (n_free > 0) {
+    const Eigen::MatrixXd correction = harmonic_correction(mesh, index, n_free, carried, out.V);
+    for (int v = 0; v < nv; ++v)
+      if (index[v] >= 0) {
+        const Eigen::Vector3d x = carried[v] * Eigen::Vector3d(mesh.V.row(v).transpose()) +
+                                  correction.row(index[v]).transpose();
+        out.V.row(v) = onto_features(around[v], after, g1, x, length).transpose();
+      }
+  }
+  // The region remeshing redoes.
+  out.region.assign(mesh.num_faces(), 0);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int l = labels[f];
+    // A feature that only moved keeps its triangles (they moved rigidly with it).
+    out.region[f] = stretch[l] || (changed[l] && !same_shape(before[l], after[l]));
+  }
+  return out;
+}
+
+std::vector<double> facing_sides(const TriangleMesh& mesh, const std::vector<int>& labels,
+                                 const std::vector<Surface>& surfaces) {
+  std::vector<double> facing(surfaces.size(), 0.0);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Surface& s = surfaces[labels[f]];
+    if (s.type == SurfaceType::Freeform) continue;
+    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+    facing[labels[f]] += (b - a).cross(c - a).dot(surface_normal(s, (a + b + c) / 3.0));
+  }
+  for (double& side : facing) side = side < 0.0 ? -1.0 : 1.0;
+  return facing;
+}
+
+void refuse_inverted(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                     const std::vector<double>& sides, const std::vector<char>& edited,
+                     const std::vector<int>& edit_of) {
+  std::map<int, int> inverted;  // feature -> triangles
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int l = labels[f];
+    if (!edited[l] || surfaces[l].type == SurfaceType::Freeform) continue;
+    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+    if (sides[l] * (b - a).cross(c - a).dot(surface_normal(surfaces[l], (a + b + c) / 3.0)) < 0.0) ++inverted[l];
+  }
+  if (inverted.empty()) return;
+  const auto worst = std::max_element(inverted.begin(), inverted.end(),
+                                      [](const auto& x, const auto& y) { return x.second < y.second; });
+  std::string what = "the edit of";
+  for (size_t i = 0; i < edit_of.size(); ++i)
+    what += (i ? ", feature " : " feature ") + std::to_string(edit_of[i]) + " (" +
+            surface_type_name(surfaces[edit_of[i]].type) + ")";
+  throw EditConflict(what + " would turn over " + std::to_string(worst->second) + " triangles of feature " +
+                     std::to_string(worst->first) + " (" + surface_type_name(surfaces[worst->first].type) +
+                     "): the change is larger than that face allows; the layer is unchanged");
+}
+
+}  // namespace idealize
