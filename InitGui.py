@@ -18,7 +18,7 @@ class IdealizeWorkbench(FreeCADGui.Workbench):
         # Imported on first activation only: keeps FreeCAD start-up free of the native core.
         import idealize.gui.commands  # noqa: F401  (registers the commands)
         commands = ["Idealize_Segment", "Idealize_SegmentIdealize", "Idealize_DeviationMap", "Idealize_MakeSolid",
-                    "Idealize_ExportStep"]
+                    "Idealize_ExportStep", "Idealize_PushPull"]
         self.appendToolbar("Idealize", commands)
         self.appendMenu("&Idealize", commands)
 

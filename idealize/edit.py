@@ -85,6 +85,30 @@ def rotate(layer, feature_ids, degrees, axis=None, center=None, keep=None, remes
     return _edit(layer, ids, motion=motion, keep=keep, remesh=remesh)
 
 
+# The edits `apply` replays: {"op": name, ...the function's keyword arguments}.
+_OPERATIONS = {"push_pull": ("feature_id", "distance"), "set_parameter": ("feature_id", "name", "value"),
+               "move": ("feature_ids", "translation"), "rotate": ("feature_ids", "degrees", "axis", "center")}
+
+
+def apply(layer, edits):
+    """Applies a list of edits in order and returns the last layer: each edit is a dict
+    ``{"op": "push_pull" | "set_parameter" | "move" | "rotate", ...}`` with the keyword arguments
+    of the function of that name (and ``keep``), as a document stores its edit history, e.g.
+    ``{"op": "push_pull", "feature_id": 3, "distance": 5.0}``."""
+    functions = {"push_pull": push_pull, "set_parameter": set_parameter, "move": move, "rotate": rotate}
+    for number, step in enumerate(edits):
+        step = dict(step)
+        op = step.pop("op", None)
+        if op not in functions:
+            raise ValueError("edit %d: unknown operation %r; the operations are %s" % (
+                number + 1, op, ", ".join(sorted(functions))))
+        unknown = set(step) - set(_OPERATIONS[op]) - {"keep", "remesh"}
+        if unknown:
+            raise ValueError("edit %d (%s): unknown argument(s) %s" % (number + 1, op, sorted(unknown)))
+        layer = functions[op](layer, **step)
+    return as_feature_layer(layer)
+
+
 def _vector(value, name):
     v = np.asarray(value, dtype=np.float64).reshape(-1)
     if v.shape != (3,) or not np.all(np.isfinite(v)):

@@ -78,12 +78,21 @@ def object_options(obj):
     return layer_options({name: getattr(obj, name) for name, *_ in OPTIONS})
 
 
-def fingerprint(mesh, options):
-    """Identifies the input of a layer: the source's vertices and triangles and the options."""
+def fingerprint(mesh, options, edits=()):
+    """Identifies the input of a layer: the source's vertices and triangles, the options and the
+    edits applied after idealization (a layer without edits keeps the fingerprint it always had)."""
     digest = hashlib.sha1(np.ascontiguousarray(mesh.vertices).tobytes())
     digest.update(np.ascontiguousarray(mesh.faces).tobytes())
     digest.update(json.dumps(options, sort_keys=True).encode())
+    if edits:
+        digest.update(json.dumps(list(edits), sort_keys=True).encode())
     return digest.hexdigest()
+
+
+def object_edits(obj):
+    """The edits a layer object applies after idealization (its Edits property, JSON), in order."""
+    text = getattr(obj, "Edits", "") or ""
+    return json.loads(text) if text else []
 
 
 def source_mesh(obj):
@@ -180,8 +189,11 @@ class LayerRecord:
     touching the document: a GUI builds it in its worker thread, so that storing it (`store`) is
     quick in the GUI thread."""
 
-    def __init__(self, layer, options, mode="Type"):
+    def __init__(self, layer, options, mode="Type", edits=(), source=None):
+        """`edits`: those applied to the idealized layer to give `layer` (idealize.edit.apply);
+        `source`: the source mesh, when `layer` is edited (its mesh is then the edited one)."""
         self.layer = layer
+        self.edits = list(edits)
         # The triangles with the mesh check's orientation repair: the B-rep is built on them.
         self.mesh_data = ply_bytes(layer.idealized_vertices, layer.oriented_faces)
         self.labels = np.asarray(layer.labels, dtype=np.int64).tolist()
@@ -191,9 +203,10 @@ class LayerRecord:
             "deviation": layer.deviation, "distance_tolerance": layer.distance_tolerance,
             "form_deviation": layer.form_deviation, "mesh_kind": layer.mesh_kind, "noise": layer.noise,
             "angle_tolerance_degrees": layer.angle_tolerance,
-            "normal_noise": layer.normal_noise, "mesh_check": layer.mesh_check}))
+            "normal_noise": layer.normal_noise, "mesh_check": layer.mesh_check,
+            "edited": bool(self.edits), "edge_lengths": layer.edge_lengths}))
         self.vertex_deviation = np.asarray(layer.vertex_deviation, dtype=np.float64).tolist()
-        self.fingerprint = fingerprint(layer.mesh, options)
+        self.fingerprint = fingerprint(source if source is not None else layer.mesh, options, self.edits)
         self.mode = mode
         self.colors = color_tuples(layer_colors(mode, layer.features, layer.labels, layer.mesh.faces,
                                                 layer.vertex_deviation, layer.distance_tolerance))
@@ -209,20 +222,26 @@ class LayerRecord:
         obj.MaxDeviation = float(layer.deviation["max"])
         obj.RmsDeviation = float(layer.deviation["rms"])
         obj.SourceFingerprint = self.fingerprint
+        edits = json.dumps(self.edits) if self.edits else ""
+        if getattr(obj, "Edits", "") != edits:
+            obj.Edits = edits
         if color_mode(obj) == self.mode:
             setattr(obj, FACE_COLORS, self.colors)
         else:
             set_colors(obj, color_mode(obj))
 
 
-def layer_record(mesh, options, mode="Type", progress=None):
+def layer_record(mesh, options, mode="Type", progress=None, edits=()):
     """The :class:`LayerRecord` of :func:`idealize.idealize` of `mesh` with `options`
-    (:func:`layer_options`), colours in `mode`: all of a layer's work that needs no document, so
-    a GUI runs it in a worker thread."""
+    (:func:`layer_options`) and then `edits` (:func:`idealize.edit.apply`), colours in `mode`: all of
+    a layer's work that needs no document, so a GUI runs it in a worker thread."""
     layer = idealize(mesh, progress=progress, **options)
+    if edits:
+        from .. import edit
+        layer = edit.apply(layer, edits)
     if progress is not None:
         progress.report("preparing the document", 1.0)
-    return LayerRecord(layer, options, mode)
+    return LayerRecord(layer, options, mode, edits, source=mesh)
 
 
 def _run_here(obj, function, *args, **kwargs):
@@ -292,6 +311,7 @@ class FeatureLayerObject:
         for kind, name, description in results:
             obj.addProperty(kind, name, "Layer", description, _READ_ONLY | _OUTPUT)
         _compact_storage(obj)
+        _add_edits_property(obj)
         obj.setEditorMode("SourceFingerprint", 2)  # hidden: bookkeeping only
         obj.setEditorMode("Labels", 2)  # hidden: a long list the property editor would choke on
         obj.setEditorMode("VertexDeviation", 2)
@@ -309,13 +329,15 @@ class FeatureLayerObject:
         a worker thread behind the progress dialog, whose Cancel leaves the layer as it was)."""
         mesh = source_mesh(obj)
         options = object_options(obj)
-        if obj.SourceFingerprint != fingerprint(mesh, options):
-            record = _runner(obj, layer_record, mesh, options, color_mode(obj))
+        edits = object_edits(obj)
+        if obj.SourceFingerprint != fingerprint(mesh, options, edits):
+            record = _runner(obj, layer_record, mesh, options, color_mode(obj), edits=edits)
             if record is not None:  # None: cancelled; its fingerprint still tells it is out of date
                 record.store(obj)
 
     def onDocumentRestored(self, obj):
         restore_compact(obj)
+        _add_edits_property(obj)  # a layer saved before editing existed
         _watch_sources()
 
     # All state is in properties. FreeCAD 0.20 saves a proxy with __getstate__ when it has one,
@@ -386,15 +408,16 @@ def is_feature_layer(obj):
 
 
 def feature_layer(obj):
-    """The :class:`idealize.FeatureLayer` a layer object holds (source mesh + stored results)."""
+    """The :class:`idealize.FeatureLayer` a layer object holds (source mesh + stored results; an
+    edited layer's mesh is its own)."""
     if not is_feature_layer(obj):
         raise TypeError("%s is not an Idealize feature layer" % getattr(obj, "Label", obj))
     table = json.loads(obj.FeatureTable)
-    mesh = source_mesh(obj)
+    idealized = mesh_from_freecad(obj.Mesh)
+    mesh = idealized if table.get("edited") else source_mesh(obj)
     labels = np.asarray(obj.Labels, dtype=np.int32)
     if len(labels) != mesh.n_triangles:
         raise MeshError("the feature layer %s is out of date: its source mesh changed; recompute it" % obj.Label)
-    idealized = mesh_from_freecad(obj.Mesh)
     layer = FeatureLayer(mesh, None, {
         "labels": labels, "features": table["features"], "adjacency": table["adjacency"],
         "relations": table["relations"], "idealized_vertices": idealized.vertices,
@@ -406,6 +429,28 @@ def feature_layer(obj):
         "timings": []})
     layer.mesh_check = table.get("mesh_check")
     layer.oriented_faces = idealized.faces  # stored with the orientation repair
+    layer.edge_lengths = table.get("edge_lengths")
+    return layer
+
+
+def _add_edits_property(obj):
+    if not hasattr(obj, "Edits"):
+        obj.addProperty("App::PropertyString", "Edits", "Layer",
+                        "JSON: the edits applied after idealization, in order (push/pull, parameters, moves)",
+                        _READ_ONLY | _OUTPUT)
+        obj.setEditorMode("Edits", 2)
+
+
+def add_edit(obj, step):
+    """Apply one edit (a dict, see :func:`idealize.edit.apply`) to a layer object: the object stores
+    the edited layer and the edit joins its Edits, so that a recompute (its source or options
+    changed) replays it. Returns the edited :class:`idealize.FeatureLayer`. Raises
+    idealize.edit.EditConflict (the object unchanged) when no ideal configuration satisfies it.
+    Callers in the GUI wrap this in a transaction."""
+    from .. import edit
+    layer = edit.apply(feature_layer(obj), [step])
+    LayerRecord(layer, object_options(obj), color_mode(obj), object_edits(obj) + [dict(step)],
+                source=source_mesh(obj)).store(obj)
     return layer
 
 

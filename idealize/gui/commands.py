@@ -249,6 +249,49 @@ class MakeSolidCommand(_LayerOrMeshCommand):
         _run("Make B-rep solid", "Make B-rep solid", compute, make_result, describe, show)
 
 
+def _selected_layer_feature():
+    """(layer object, feature id) of the one facet of a feature layer selected in the 3D view, or
+    None."""
+    selection = FreeCADGui.Selection.getSelectionEx()
+    if len(selection) != 1 or not layer_object.is_feature_layer(selection[0].Object):
+        return None
+    facets = [name for name in selection[0].SubElementNames if name.startswith("Facet")]
+    if len(facets) != 1:
+        return None
+    obj, facet = selection[0].Object, int(facets[0][len("Facet"):])
+    labels = obj.Labels
+    if not 0 <= facet < len(labels) or labels[facet] < 0:
+        return None
+    return obj, int(labels[facet])
+
+
+class PushPullCommand:
+    def GetResources(self):
+        return {"Pixmap": icon("Idealize_PushPull"),
+                "MenuText": "Push/Pull",
+                "ToolTip": "Edit the feature of the selected face of a feature layer: move it along its normal or "
+                           "change its radius or angle; fillets and related features follow, the mesh is "
+                           "remeshed, and a B-rep solid made from it is regenerated"}
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and FreeCADGui.Control.activeDialog() is False \
+            and _selected_layer_feature() is not None
+
+    def Activated(self):
+        from .task_push_pull import PushPullPanel
+        selected = _selected_layer_feature()
+        if selected is None:
+            return
+        obj, feature = selected
+        try:
+            panel = PushPullPanel(obj, feature)
+        except Exception as error:
+            report_error("Push/Pull", error)
+            return
+        FreeCADGui.Selection.clearSelection()  # the highlight would hide the preview's colours
+        FreeCADGui.Control.showDialog(panel)
+
+
 def _selected_shapes():
     return [o for o in FreeCADGui.Selection.getSelection() if o.isDerivedFrom("Part::Feature")]
 
@@ -282,3 +325,4 @@ FreeCADGui.addCommand("Idealize_SegmentIdealize", SegmentIdealizeCommand())
 FreeCADGui.addCommand("Idealize_DeviationMap", DeviationMapCommand())
 FreeCADGui.addCommand("Idealize_MakeSolid", MakeSolidCommand())
 FreeCADGui.addCommand("Idealize_ExportStep", ExportStepCommand())
+FreeCADGui.addCommand("Idealize_PushPull", PushPullCommand())

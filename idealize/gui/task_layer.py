@@ -9,7 +9,6 @@ import FreeCADGui
 import numpy as np
 
 from ..freecad import layer_object
-from ..features import idealize
 from ..freecad.mesh import mesh_check_summary, mesh_from_freecad
 from .progress import run_with_progress
 
@@ -178,8 +177,9 @@ class FeatureLayerPanel:
         values = {"AngleTolerance": form.angleTolerance.value(), "DistanceTolerance": form.distanceTolerance.value(),
                   "RadiusTolerance": form.radiusTolerance.value(), "IdealizeRelations": form.idealizeRelations.isChecked()}
         options = layer_object.layer_options(values)
-        try:
-            layer = run_with_progress("Recompute feature layer", idealize, layer_object.source_mesh(obj), **options)
+        try:  # the layer's edits are replayed on the new idealization
+            record = run_with_progress("Recompute feature layer", layer_object.layer_record, layer_object.source_mesh(obj),
+                                       options, obj.ViewObject.ColorBy, edits=layer_object.object_edits(obj))
         except Exception as error:
             report_error("Recompute feature layer", error)
             return
@@ -188,7 +188,7 @@ class FeatureLayerPanel:
         try:
             for name, value in values.items():
                 setattr(obj, name, value)
-            layer_object.apply_layer(obj, layer, options)
+            record.store(obj)
             doc.recompute()
             doc.commitTransaction()
         except Exception as error:

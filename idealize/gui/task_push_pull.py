@@ -1,0 +1,208 @@
+"""Task panel of Push/Pull (Resources/ui/PushPull.ui): edits one feature of a feature layer, its
+offset along its normal or one of its parameters, with the relations to keep. A preview of the
+edited mesh replaces the layer in the 3D view as the value changes; a conflict shows in the panel.
+OK applies the edit as one undo step and regenerates the B-rep solids made from the layer's source.
+"""
+import math
+import os
+
+import FreeCAD
+import FreeCADGui
+import numpy as np
+
+from .. import edit
+from ..freecad import layer_object
+from ..freecad import solid as freecad_solid
+from ..brep import make_solid
+
+UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                       "Resources", "ui", "PushPull.ui")
+# What each type's parameters are called in the panel: (label, report name, shown as degrees).
+PARAMETERS = {"cylinder": [("Radius", "radius", False)], "sphere": [("Radius", "radius", False)],
+              "torus": [("Major radius", "major", False), ("Minor radius", "minor", False)],
+              "cone": [("Half angle", "half_angle", True)]}
+# The preview waits for the typing to pause: a quarter second, about where a user notices a lag.
+PREVIEW_DELAY_MS = 250
+
+
+def edit_step(feature, parameter, value, keep):
+    """The edit (a dict for idealize.edit.apply) the panel's values describe: "offset" pushes or
+    pulls by `value`, a parameter (its report name) takes `value` (degrees for a half angle)."""
+    if parameter == "offset":
+        return {"op": "push_pull", "feature_id": int(feature["id"]), "distance": float(value), "keep": dict(keep)}
+    if parameter == "half_angle":
+        value = math.radians(value)
+    return {"op": "set_parameter", "feature_id": int(feature["id"]), "name": parameter, "value": float(value),
+            "keep": dict(keep)}
+
+
+def regenerate_solids(obj, layer):
+    """Rebuild the shape of every B-rep solid made from the layer's source (Part::Features with
+    IdealizeSolid linked to it) from the edited `layer`. Returns how many."""
+    count = 0
+    for other in obj.Document.Objects:
+        if hasattr(other, "IdealizeSolid") and getattr(other, "Source", None) == obj.Source:
+            solid = make_solid(layer)
+            other.Shape = solid.part_shape()
+            other.IdealizeSolid = bool(solid.solid)
+            other.IdealizeProblems = [("feature %d: " % f if f >= 0 else "") + m for f, m in solid.problems]
+            if other.ViewObject is not None:
+                other.ViewObject.DiffuseColor = freecad_solid.face_colors(other.Shape)
+            count += 1
+    return count
+
+
+class Preview:
+    """The edited mesh drawn in the 3D view (coloured by feature type) in place of the layer."""
+
+    def __init__(self, obj):
+        from pivy import coin
+        self.obj = obj
+        self.node = coin.SoSeparator()
+        hints = coin.SoShapeHints()
+        hints.vertexOrdering = coin.SoShapeHints.COUNTERCLOCKWISE
+        self.material = coin.SoMaterial()
+        binding = coin.SoMaterialBinding()
+        binding.value = coin.SoMaterialBinding.PER_FACE
+        self.coordinates = coin.SoCoordinate3()
+        self.faces = coin.SoIndexedFaceSet()
+        for child in (hints, self.material, binding, self.coordinates, self.faces):
+            self.node.addChild(child)
+        self.view = FreeCADGui.getDocument(obj.Document.Name).ActiveView
+        self.shown = False
+        self.layer_visible = obj.ViewObject.Visibility
+
+    def show(self, layer):
+        colors = layer_object.layer_colors("Type", layer.features, layer.labels, layer.mesh.faces,
+                                           layer.vertex_deviation, layer.distance_tolerance)
+        self.material.diffuseColor.setValues(0, len(colors), colors.tolist())
+        self.material.diffuseColor.setNum(len(colors))
+        V, F = layer.mesh.vertices, layer.mesh.faces
+        self.coordinates.point.setValues(0, len(V), V.tolist())
+        self.coordinates.point.setNum(len(V))
+        index = np.hstack([F, -np.ones((len(F), 1), dtype=F.dtype)]).ravel().tolist()
+        self.faces.coordIndex.setValues(0, len(index), index)
+        self.faces.coordIndex.setNum(len(index))
+        if not self.shown:
+            self.view.getSceneGraph().addChild(self.node)
+            self.obj.ViewObject.Visibility = False
+            self.shown = True
+
+    def hide(self):
+        if self.shown:
+            self.view.getSceneGraph().removeChild(self.node)
+            self.obj.ViewObject.Visibility = self.layer_visible
+            self.shown = False
+
+
+class PushPullPanel:
+    def __init__(self, obj, feature_id):
+        from PySide import QtCore, QtGui
+        self.obj = obj
+        self.layer = layer_object.feature_layer(obj)
+        self.feature = self.layer.features[feature_id]
+        self.form = FreeCADGui.PySideUic.loadUi(UI_FILE)
+        self.form.setWindowIcon(QtGui.QIcon(os.path.join(os.path.dirname(UI_FILE), "..", "icons",
+                                                         "Idealize_PushPull.svg")))
+        from .task_layer import key_parameters
+        self.form.feature.setText("Feature %d, %s: %s." % (feature_id, self.feature["type"],
+                                                           key_parameters(self.feature)))
+        self.choices = [("Push/pull (offset)", "offset", False)] + PARAMETERS.get(self.feature["type"], [])
+        self.form.parameter.addItems([label for label, _, _ in self.choices])
+        self.form.parameter.currentIndexChanged.connect(self.parameter_changed)
+        self.form.value.setRange(-1e9, 1e9)
+        self.form.value.valueChanged.connect(self.schedule)
+        for name in edit.RELATIONS:
+            getattr(self.form, name).toggled.connect(self.schedule)
+        self.timer = QtCore.QTimer()
+        self.timer.setSingleShot(True)
+        self.timer.timeout.connect(self.update_preview)
+        self.preview = Preview(obj)
+        self.edited = None
+        self.parameter_changed(0)
+
+    # --- values
+    def parameter(self):
+        return self.choices[self.form.parameter.currentIndex()]
+
+    def keep(self):
+        return {name: getattr(self.form, name).isChecked() for name in edit.RELATIONS}
+
+    def parameter_changed(self, index):
+        _, name, degrees = self.choices[index]
+        value = 0.0 if name == "offset" else float(self.feature["params"][name])
+        self.form.value.blockSignals(True)
+        self.form.value.setSuffix(" °" if degrees else " mm")
+        self.form.value.setValue(math.degrees(value) if degrees else value)
+        self.form.value.blockSignals(False)
+        self.form.status.setText("")
+        self.preview.hide()
+        self.edited = None
+
+    def step(self):
+        return edit_step(self.feature, self.parameter()[1], self.form.value.value(), self.keep())
+
+    def unchanged(self):
+        _, name, degrees = self.parameter()
+        value = self.form.value.value()
+        current = 0.0 if name == "offset" else float(self.feature["params"][name])
+        return value == (math.degrees(current) if degrees else current)
+
+    # --- preview
+    def schedule(self, *args):
+        self.timer.start(PREVIEW_DELAY_MS)
+
+    def update_preview(self):
+        """Compute the edit (in the GUI thread: a push/pull takes well under a second) and show it,
+        or say why it cannot be made."""
+        if self.unchanged():
+            self.preview.hide()
+            self.edited = None
+            self.form.status.setText("")
+            return
+        try:
+            self.edited = edit.apply(self.layer, [self.step()])
+        except (ValueError, edit.EditConflict) as error:
+            self.edited = None
+            self.preview.hide()
+            self.form.status.setText("Cannot apply: %s" % error)
+            return
+        self.preview.show(self.edited)
+        self.form.status.setText("Preview: %d features change (%s)." % (
+            len(self.edited.changed), ", ".join(str(f) for f in self.edited.changed)))
+
+    # --- task dialog protocol
+    def getStandardButtons(self):
+        from PySide import QtGui
+        return int(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
+
+    def accept(self):
+        """Apply the edit as one undo step; regenerate the solids made from the layer's source."""
+        from .commands import report_error
+        self.timer.stop()
+        if self.unchanged():
+            return self.reject()
+        doc = self.obj.Document
+        doc.openTransaction("Push/Pull")
+        try:
+            layer = layer_object.add_edit(self.obj, self.step())
+            solids = regenerate_solids(self.obj, layer)
+            doc.recompute()
+            doc.commitTransaction()
+        except Exception as error:  # the document must not keep half an edit
+            doc.abortTransaction()
+            report_error("Push/Pull", error)
+            return False
+        FreeCAD.Console.PrintMessage("Idealize: %s edited (features %s changed)%s\n" % (
+            self.obj.Label, ", ".join(str(f) for f in layer.changed),
+            "; %d solid(s) regenerated" % solids if solids else ""))
+        return self._close()
+
+    def reject(self):
+        self.timer.stop()
+        return self._close()
+
+    def _close(self):
+        self.preview.hide()
+        FreeCADGui.Control.closeDialog()
+        return True
