@@ -151,16 +151,30 @@ def _edit(layer, feature_ids, motion=None, parameter="none", value=0.0, keep=Non
         _feature(layer, f)
     flags = _keep_flags(keep)
     start = time.perf_counter()
+    faces, labels = _kept_triangles(layer)
     result = native.edit_features(
-        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64),
-        np.ascontiguousarray(layer.oriented_faces, dtype=np.int32),
-        np.asarray(layer.labels, dtype=np.int32),
+        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64), faces, labels,
         [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features],
         list(layer.adjacency), [dict(r) for r in layer.relations], feature_ids,
         motion=np.eye(4) if motion is None else motion, parameter=parameter, value=value, keep=flags,
         distance_tolerance=float(layer.distance_tolerance), remesh=bool(remesh),
         target_edge_lengths=list(layer.edge_lengths or []))
     return _edited_layer(layer, result, flags, time.perf_counter() - start)
+
+
+def _kept_triangles(layer):
+    """The layer's triangles (oriented) and labels without those the mesh check sets aside: a
+    triangle that repeats a vertex, or repeats another triangle (the edited mesh is one manifold
+    surface, which they would break)."""
+    faces = np.asarray(layer.oriented_faces, dtype=np.int32)
+    labels = np.asarray(layer.labels, dtype=np.int32)
+    ordered = np.sort(faces, axis=1)
+    distinct = (ordered[:, 0] != ordered[:, 1]) & (ordered[:, 1] != ordered[:, 2])
+    _, first = np.unique(ordered, axis=0, return_index=True)
+    keep = np.zeros(len(faces), dtype=bool)
+    keep[first] = True
+    keep &= distinct
+    return np.ascontiguousarray(faces[keep]), np.ascontiguousarray(labels[keep])
 
 
 def _edited_layer(layer, result, flags, seconds):
@@ -205,4 +219,7 @@ def _edited_layer(layer, result, flags, seconds):
     out.changed = [i for i, flag in enumerate(changed) if flag]
     # The density of the first edit's mesh, which successive edits keep (no drift).
     out.edge_lengths = list(result["target_edge_lengths"])
+    # Why the adaptive remeshing did not run (None when it did): the vertices moved, the
+    # triangles stretched as they came.
+    out.remeshing_problem = result["remeshing_problem"] or None
     return out

@@ -180,3 +180,16 @@ def test_successive_large_edits_keep_the_triangles_well_shaped(plate):
     assert (shapes.min_angles(V, F) >= 20).mean() >= 0.97
     after = np.linalg.norm(V[F] - np.roll(V[F], 1, axis=1), axis=2)
     assert after.mean() == pytest.approx(edges.mean(), rel=0.2)
+
+
+@needs_freecad
+def test_a_repeated_triangle_of_the_input_does_not_stop_an_edit():
+    """The mesh check sets a repeated triangle aside; the edit leaves it out, and remeshes."""
+    _, Part, _ = shapes.freecad()
+    V, F = shapes.quality_mesh(Part.makeBox(60, 40, 20), 4.0)
+    layer = idealize.idealize(idealize.Mesh(V, np.vstack([F, F[:1]])))
+    assert layer.mesh_check["duplicate_removed"] == 1
+    edited = edit.push_pull(layer, plane_at(layer, (0, 0, 1), 20), 5.0)
+    assert edited.remeshing_problem is None
+    check_exact(edited, 6)
+    assert idealize.make_solid(edited).volume == pytest.approx(60 * 40 * 25, rel=1e-6)

@@ -117,6 +117,7 @@ void bind_edit(py::module_& m) {
         d["changed"] = changed;
         d["vertex_deviation"] = std::move(result.vertex_deviation);
         d["target_edge_lengths"] = std::move(result.target_edge_lengths);
+        d["remeshing_problem"] = result.remeshing_problem;
         return d;
       },
       py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("adjacency"),

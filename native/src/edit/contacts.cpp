@@ -115,7 +115,7 @@ std::vector<Contact> tangent_contacts(const TriangleMesh& mesh, const std::vecto
   // The features around each vertex.
   std::vector<std::vector<int>> around(mesh.num_vertices());
   for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < 3 && labels[f] >= 0; ++c) {
       auto& a = around[mesh.F(f, c)];
       if (std::find(a.begin(), a.end(), labels[f]) == a.end()) a.push_back(labels[f]);
     }

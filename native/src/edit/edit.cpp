@@ -21,7 +21,8 @@ void check_layer(const TriangleMesh& mesh, const std::vector<int>& labels, const
     throw std::invalid_argument("the layer has " + std::to_string(labels.size()) + " labels for " +
                                 std::to_string(mesh.num_faces()) + " triangles");
   auto valid = [n](int f) { return f >= 0 && f < n; };
-  if (!std::all_of(labels.begin(), labels.end(), valid))
+  // -1: a triangle the mesh check set aside (degenerate or duplicate); it belongs to no feature.
+  if (!std::all_of(labels.begin(), labels.end(), [&](int f) { return f == -1 || valid(f); }))
     throw std::invalid_argument("a triangle's label names no feature of the layer");
   for (const FeatureAdjacency& a : adjacency)
     if (!valid(a.a) || !valid(a.b)) throw std::invalid_argument("an adjacency names no feature of the layer");
@@ -34,8 +35,8 @@ Eigen::VectorXd vertex_deviation(const TriangleMesh& mesh, const std::vector<int
                                  const std::vector<Surface>& surfaces) {
   Eigen::VectorXd deviation = Eigen::VectorXd::Constant(mesh.num_vertices(), std::numeric_limits<double>::infinity());
   for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (labels[f] < 0 || surfaces[labels[f]].type == SurfaceType::Freeform) continue;
     const Surface& s = surfaces[labels[f]];
-    if (s.type == SurfaceType::Freeform) continue;
     for (int c = 0; c < 3; ++c) {
       const int v = mesh.F(f, c);
       deviation(v) = std::min(deviation(v), std::abs(signed_distance(s, mesh.V.row(v).transpose())));
@@ -64,11 +65,16 @@ double tightest_radius(const Surface& s, const TriangleMesh& mesh, const std::ve
 }
 
 // Each feature's target edge length: the density it has, its own mean edge length, but no longer
-// than keeps its chords as close to a curved surface as its own edges keep them (an edge of length
-// l across a radius r lies l^2 / 8r off it; isotropic remeshing leaves edges up to 4/3 of the
-// target). `given` (per feature, or empty) wins where positive.
+// than keeps its chords as close to a curved surface as its own edges keep them, or a quarter of
+// the distance tolerance, whichever is looser (an edge of length l across a radius r lies l^2 / 8r
+// off it; isotropic remeshing leaves edges up to 4/3 of the target, which then lie (4/3)^2 / 4 =
+// 0.44 of the tolerance off: still equal to the surface for the layer). A CAD export's holes,
+// tessellated in slivers as fine across as a thousandth of the tolerance, would otherwise be
+// remeshed into hundreds of thousands of triangles. `given` (per feature, or empty) wins where
+// positive.
 std::vector<double> remeshing_targets(const TriangleMesh& mesh, const std::vector<int>& labels,
-                                      const std::vector<Surface>& surfaces, const std::vector<double>& given) {
+                                      const std::vector<Surface>& surfaces, const std::vector<double>& given,
+                                      double distance_tolerance) {
   const size_t n = surfaces.size();
   auto is_given = [&](size_t l) { return l < given.size() && given[l] > 0.0; };
   std::vector<std::vector<double>> edges(n);
@@ -76,7 +82,7 @@ std::vector<double> remeshing_targets(const TriangleMesh& mesh, const std::vecto
   std::vector<std::vector<int>> corners(n);
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const int l = labels[f];
-    if (is_given(l)) continue;
+    if (l < 0 || is_given(l)) continue;
     for (int c = 0; c < 3; ++c) {
       const Eigen::Vector3d a = mesh.V.row(mesh.F(f, c)), b = mesh.V.row(mesh.F(f, (c + 1) % 3));
       edges[l].push_back((b - a).norm());
@@ -90,8 +96,8 @@ std::vector<double> remeshing_targets(const TriangleMesh& mesh, const std::vecto
     if (edges[l].empty()) continue;
     target[l] = std::accumulate(edges[l].begin(), edges[l].end(), 0.0) / static_cast<double>(edges[l].size());
     const double radius = tightest_radius(surfaces[l], mesh, corners[l]);
-    if (std::isfinite(radius) && sagitta[l] > 0.0)
-      target[l] = std::min(target[l], 0.75 * std::sqrt(8.0 * radius * sagitta[l]));
+    const double off = std::max(sagitta[l], 0.25 * distance_tolerance);
+    if (std::isfinite(radius) && off > 0.0) target[l] = std::min(target[l], 0.75 * std::sqrt(8.0 * radius * off));
   }
   return target;
 }
@@ -106,14 +112,16 @@ EditResult edit_features(const TriangleMesh& mesh, const std::vector<int>& label
   MovedVertices moved = move_vertices(mesh, labels, adjacency, surfaces, propagation);
   const std::vector<double> sides = facing_sides(mesh, labels, surfaces);
   std::vector<char> edited(surfaces.size(), 0);
-  for (int f = 0; f < mesh.num_faces(); ++f) edited[labels[f]] |= moved.region[f] || propagation.changed[labels[f]];
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (labels[f] >= 0) edited[labels[f]] |= moved.region[f] || propagation.changed[labels[f]];
   EditResult result;
   result.surfaces = propagation.surfaces;
   result.changed = propagation.changed;
   result.mesh.V = std::move(moved.V);
   result.mesh.F = mesh.F;
   result.labels = labels;
-  result.target_edge_lengths = remeshing_targets(mesh, labels, surfaces, options.target_edge_lengths);
+  result.target_edge_lengths =
+      remeshing_targets(mesh, labels, surfaces, options.target_edge_lengths, options.distance_tolerance);
   if (!options.remesh || std::none_of(moved.region.begin(), moved.region.end(), [](char r) { return r; })) {
     refuse_inverted(result.mesh, result.labels, result.surfaces, sides, edited, edit.features);
     result.vertex_deviation = vertex_deviation(result.mesh, result.labels, result.surfaces);
@@ -125,11 +133,24 @@ EditResult edit_features(const TriangleMesh& mesh, const std::vector<int>& label
   std::set<std::pair<int, int>> g1;
   for (const FeatureAdjacency& a : adjacency)
     if (a.continuity == Continuity::G1) g1.insert({std::min(a.a, a.b), std::max(a.a, a.b)});
-  RemeshedLayer remeshed = remesh_adaptive(result.mesh, result.labels, kept, result.surfaces, g1,
-                                           options.remesh_iterations);
-  result.mesh = std::move(remeshed.mesh);
-  result.labels = std::move(remeshed.labels);
-  refuse_inverted(result.mesh, result.labels, result.surfaces, sides, edited, edit.features);
+  // The remeshing relocates the few triangles a large change turns over near a border. When it
+  // fails (CGAL refuses a configuration) or leaves triangles turned over, the moved mesh stands
+  // if it is valid by itself: the edit degrades to stretched triangles instead of failing.
+  try {
+    RemeshedLayer remeshed = remesh_adaptive(result.mesh, result.labels, kept, result.surfaces, g1,
+                                             options.remesh_iterations);
+    const std::string inverted = inverted_triangles(remeshed.mesh, remeshed.labels, result.surfaces, sides, edited);
+    if (inverted.empty()) {
+      result.mesh = std::move(remeshed.mesh);
+      result.labels = std::move(remeshed.labels);
+    } else {
+      result.remeshing_problem = "the remeshing turned " + inverted + " over";
+    }
+  } catch (const std::exception& e) {
+    result.remeshing_problem = e.what();
+  }
+  if (!result.remeshing_problem.empty())
+    refuse_inverted(result.mesh, result.labels, result.surfaces, sides, edited, edit.features);
   result.vertex_deviation = vertex_deviation(result.mesh, result.labels, result.surfaces);
   return result;
 }

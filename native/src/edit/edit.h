@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace idealize {
@@ -78,6 +79,9 @@ struct EditResult {
   // (NaN where only freeform features touch it), as the layer's vertex_deviation.
   Eigen::VectorXd vertex_deviation;
   std::vector<double> target_edge_lengths;  // per feature: the remeshing targets used (or derived)
+  // Empty when the remeshing ran (or was not asked for); else why it failed: the mesh is then the
+  // one with its vertices moved, valid but with the stretched triangles as they came.
+  std::string remeshing_problem;
 };
 
 // Applies `edit` to a layer: `mesh` its idealized mesh (vertices on their features' surfaces,

@@ -17,7 +17,7 @@ namespace {
 std::vector<std::vector<int>> features_around(const TriangleMesh& mesh, const std::vector<int>& labels) {
   std::vector<std::vector<int>> around(mesh.num_vertices());
   for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < 3 && labels[f] >= 0; ++c) {  // (-1: a triangle set aside, no feature)
       auto& a = around[mesh.F(f, c)];
       if (std::find(a.begin(), a.end(), labels[f]) == a.end()) a.push_back(labels[f]);
     }
@@ -105,7 +105,8 @@ Eigen::Vector3d onto_features(const std::vector<int>& features, const std::vecto
                               const std::set<std::pair<int, int>>& g1, Eigen::Vector3d p, double length) {
   std::vector<int> analytic;
   for (int f : features)
-    if (surfaces[f].type != SurfaceType::Freeform) analytic.push_back(f);
+    if (f >= 0 && surfaces[f].type != SurfaceType::Freeform) analytic.push_back(f);
+  if (analytic.empty()) return p;
   if (analytic.size() == 1) return closest_point(surfaces[analytic[0]], p);
   // Tangent pairs: their contact line replaces the two surfaces, whose normals agree along it.
   std::vector<std::pair<int, int>> contacts;  // roller, other
@@ -193,7 +194,7 @@ MovedVertices move_vertices(const TriangleMesh& mesh, const std::vector<int>& la
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const int l = labels[f];
     // A feature that only moved keeps its triangles (they moved rigidly with it).
-    out.region[f] = stretch[l] || (changed[l] && !same_shape(before[l], after[l]));
+    out.region[f] = l >= 0 && (stretch[l] || (changed[l] && !same_shape(before[l], after[l])));
   }
   return out;
 }
@@ -202,8 +203,8 @@ std::vector<double> facing_sides(const TriangleMesh& mesh, const std::vector<int
                                  const std::vector<Surface>& surfaces) {
   std::vector<double> facing(surfaces.size(), 0.0);
   for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (labels[f] < 0 || surfaces[labels[f]].type == SurfaceType::Freeform) continue;
     const Surface& s = surfaces[labels[f]];
-    if (s.type == SurfaceType::Freeform) continue;
     const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
     facing[labels[f]] += (b - a).cross(c - a).dot(surface_normal(s, (a + b + c) / 3.0));
   }
@@ -211,26 +212,34 @@ std::vector<double> facing_sides(const TriangleMesh& mesh, const std::vector<int
   return facing;
 }
 
-void refuse_inverted(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
-                     const std::vector<double>& sides, const std::vector<char>& edited,
-                     const std::vector<int>& edit_of) {
+std::string inverted_triangles(const TriangleMesh& mesh, const std::vector<int>& labels,
+                               const std::vector<Surface>& surfaces, const std::vector<double>& sides,
+                               const std::vector<char>& edited) {
   std::map<int, int> inverted;  // feature -> triangles
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const int l = labels[f];
-    if (!edited[l] || surfaces[l].type == SurfaceType::Freeform) continue;
+    if (l < 0 || !edited[l] || surfaces[l].type == SurfaceType::Freeform) continue;
     const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
     if (sides[l] * (b - a).cross(c - a).dot(surface_normal(surfaces[l], (a + b + c) / 3.0)) < 0.0) ++inverted[l];
   }
-  if (inverted.empty()) return;
+  if (inverted.empty()) return "";
   const auto worst = std::max_element(inverted.begin(), inverted.end(),
                                       [](const auto& x, const auto& y) { return x.second < y.second; });
+  return std::to_string(worst->second) + " triangles of feature " + std::to_string(worst->first) + " (" +
+         surface_type_name(surfaces[worst->first].type) + ")";
+}
+
+void refuse_inverted(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                     const std::vector<double>& sides, const std::vector<char>& edited,
+                     const std::vector<int>& edit_of) {
+  const std::string inverted = inverted_triangles(mesh, labels, surfaces, sides, edited);
+  if (inverted.empty()) return;
   std::string what = "the edit of";
   for (size_t i = 0; i < edit_of.size(); ++i)
     what += (i ? ", feature " : " feature ") + std::to_string(edit_of[i]) + " (" +
             surface_type_name(surfaces[edit_of[i]].type) + ")";
-  throw EditConflict(what + " would turn over " + std::to_string(worst->second) + " triangles of feature " +
-                     std::to_string(worst->first) + " (" + surface_type_name(surfaces[worst->first].type) +
-                     "): the change is larger than that face allows; the layer is unchanged");
+  throw EditConflict(what + " would turn over " + inverted +
+                     ": the change is larger than that face allows; the layer is unchanged");
 }
 
 }  // namespace idealize

@@ -10,6 +10,7 @@
 #include "edit/propagate.h"
 
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -37,6 +38,12 @@ Eigen::Vector3d onto_features(const std::vector<int>& features, const std::vecto
 // the other (freeform features: +1).
 std::vector<double> facing_sides(const TriangleMesh& mesh, const std::vector<int>& labels,
                                  const std::vector<Surface>& surfaces);
+
+// "N triangles of feature F (type)": the feature with the most triangles of an `edited` feature
+// that face against its surface's side `sides`; empty when none does.
+std::string inverted_triangles(const TriangleMesh& mesh, const std::vector<int>& labels,
+                               const std::vector<Surface>& surfaces, const std::vector<double>& sides,
+                               const std::vector<char>& edited);
 
 // Throws EditConflict naming the edited features `edit_of` and the feature with the most triangles
 // turned over: triangles of an `edited` feature that face against its surface's side `sides` (a

@@ -127,7 +127,7 @@ RemeshedLayer remesh_adaptive(const TriangleMesh& mesh, const std::vector<int>& 
   for (size_t f = 0; f < target_edge_length.size(); ++f) edited[f] = target_edge_length[f] > 0.0;
   for (VertexIndex v : sm.vertices()) {
     const std::vector<int> around = features_at(sm, patch, v);
-    if (std::any_of(around.begin(), around.end(), [&](int l) { return edited[l]; })) sm.point(v) = project(v);
+    if (std::any_of(around.begin(), around.end(), [&](int l) { return l >= 0 && edited[l]; })) sm.point(v) = project(v);
   }
   return from_surface_mesh(sm, patch);
 }
