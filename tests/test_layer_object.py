@@ -242,3 +242,40 @@ def test_the_core_api_imports_nothing_of_freecad():
                           "from idealize.freecad.layer_object import FeatureLayerObject as B; print(A is B)"],
                          cwd=root, capture_output=True, text=True)
     assert old.stdout.strip() == "True", old.stderr
+
+
+@needs_freecad
+def test_edits_are_kept_replayed_on_recompute_and_saved(document, tmp_path):
+    """add_edit stores the edited layer and the edit; a recompute after an option change idealizes
+    the source again and replays it; save and reopen keep it; the source is untouched."""
+    FreeCAD, doc = document
+    import idealize
+    from idealize.freecad import layer_object
+    source, V, F = bracket_object(doc)
+    before = source.Mesh.copy()
+    layer = idealize.make_feature_layer(source)
+    table = json.loads(layer.FeatureTable)
+    top = [f["id"] for f in table["features"] if f["type"] == "plane" and f["params"]["normal"][2] > 0.99
+           and abs(f["params"]["point"][2] - 20) < 1e-6][0]
+    edited = layer_object.add_edit(layer, {"op": "push_pull", "feature_id": top, "distance": 4.0})
+    doc.recompute()
+    assert "Touched" not in layer.State  # stored as computed
+    assert len(json.loads(layer.Edits)) == 1 and layer.Mesh.CountFacets == len(edited.mesh.faces)
+    stored = idealize.feature_layer(layer)
+    assert stored.features[top]["params"]["point"][2] == pytest.approx(24.0)
+    volume = idealize.make_solid(stored).volume
+    assert volume == pytest.approx(idealize.make_solid(edited).volume, rel=1e-6)
+    # An option change recomputes from the source, and replays the edit.
+    layer.RadiusTolerance = layer.RadiusTolerance + 1
+    doc.recompute()
+    replayed = idealize.feature_layer(layer)
+    assert replayed.features[top]["params"]["point"][2] == pytest.approx(24.0)
+    assert idealize.make_solid(replayed).volume == pytest.approx(volume, rel=1e-4)
+    path = str(tmp_path / "edited.FCStd")
+    doc.saveAs(path)
+    name = layer.Name
+    FreeCAD.closeDocument(doc.Name)
+    reopened = FreeCAD.openDocument(path)
+    again = idealize.feature_layer(reopened.getObject(name))
+    assert again.features[top]["params"]["point"][2] == pytest.approx(24.0)
+    assert reopened.getObject("Bracket").Mesh.Topology == before.Topology
