@@ -40,6 +40,20 @@ def ensure_link():
     return True
 
 
+def start_session():
+    """The start of a GUI test's run(): the Mod link (False when FreeCAD must start again to see
+    it), error boxes recorded instead of shown (a failing command would block on its modal box),
+    and the Idealize workbench active."""
+    from PySide import QtGui
+    if ensure_link():
+        result["restart"] = True  # FreeCAD scans the Mod folders only at start-up
+        return False
+    result["error_boxes"] = []
+    QtGui.QMessageBox.critical = lambda parent, title, text, *rest: result["error_boxes"].append(text)
+    Gui.activateWorkbench("IdealizeWorkbench")
+    return True
+
+
 def screenshot_pixels(path):
     """All pixels of a screenshot as (n, 3) RGB ints, and those that are coloured (not white,
     black or grey)."""

@@ -32,14 +32,10 @@ CONFIG_TOP = []
 
 
 def run():
-    if ensure_link():
-        result["restart"] = True  # FreeCAD scans the Mod folders only at start-up
+    if not start_session():
         return
     from PySide import QtGui
-    import Mesh, MeshPart, Part
-    result["error_boxes"] = []
-    QtGui.QMessageBox.critical = lambda parent, title, text, *rest: result["error_boxes"].append(text)
-    Gui.activateWorkbench("IdealizeWorkbench")
+    import MeshPart, Part
 
     doc = App.newDocument("PushPull")
     plate = Part.makeBox(60, 40, 20).cut(Part.makeCylinder(6, 20, App.Vector(20, 20, 0)))

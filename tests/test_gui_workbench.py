@@ -198,14 +198,10 @@ def check_panel(doc, layer):
 
 
 def run():
-    if ensure_link():
-        result["restart"] = True  # FreeCAD scans the Mod folders only at start-up
+    if not start_session():
         return
     import Mesh
     from PySide import QtGui
-    result["error_boxes"] = []
-    QtGui.QMessageBox.critical = lambda parent, title, text, *rest: result["error_boxes"].append(text)
-    Gui.activateWorkbench("IdealizeWorkbench")
     result["preferences"] = check_preferences()
 
     doc = App.newDocument("NewUser")

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <utility>
 
 namespace idealize {
 namespace {
@@ -119,6 +121,17 @@ std::vector<Contact> tangent_contacts(const TriangleMesh& mesh, const std::vecto
       auto& a = around[mesh.F(f, c)];
       if (std::find(a.begin(), a.end(), labels[f]) == a.end()) a.push_back(labels[f]);
     }
+  // The vertices each pair shares, in one pass over the vertices.
+  std::map<std::pair<int, int>, std::vector<int>> shared;
+  for (const auto& [a, b] : pairs) shared[{std::min(a, b), std::max(a, b)}];
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const auto& f = around[v];
+    for (size_t i = 0; i < f.size(); ++i)
+      for (size_t j = i + 1; j < f.size(); ++j) {
+        const auto it = shared.find({std::min(f[i], f[j]), std::max(f[i], f[j])});
+        if (it != shared.end()) it->second.push_back(v);
+      }
+  }
   std::vector<Contact> contacts;
   for (const auto& [a, b] : pairs) {
     const int roller_id = roller_of(surfaces[a], a, surfaces[b], b);
@@ -128,11 +141,7 @@ std::vector<Contact> tangent_contacts(const TriangleMesh& mesh, const std::vecto
     contact.other = roller_id == a ? b : a;
     const Surface &roller = surfaces[contact.roller], &other = surfaces[contact.other];
     std::vector<Eigen::Vector3d> samples;
-    for (int v = 0; v < mesh.num_vertices(); ++v) {
-      const auto& f = around[v];
-      if (std::find(f.begin(), f.end(), a) != f.end() && std::find(f.begin(), f.end(), b) != f.end())
-        samples.push_back(spine_sample(roller, mesh.V.row(v).transpose()));
-    }
+    for (int v : shared[{std::min(a, b), std::max(a, b)}]) samples.push_back(spine_sample(roller, mesh.V.row(v).transpose()));
     if (samples.empty()) continue;
     contact.samples = roller.type == SurfaceType::Sphere ? std::vector<Eigen::Vector3d>{Eigen::Vector3d::Zero()}
                                                           : spread(std::move(samples), roller.type, max_samples);

@@ -14,6 +14,9 @@
 namespace idealize {
 namespace {
 
+// The most steps an edit that turns triangles over is split into (see edit_features).
+constexpr int kMostSteps = 8;
+
 void check_layer(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
                  const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations) {
   const int n = static_cast<int>(surfaces.size());
@@ -102,12 +105,9 @@ std::vector<double> remeshing_targets(const TriangleMesh& mesh, const std::vecto
   return target;
 }
 
-}  // namespace
-
-EditResult edit_features(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
-                         const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations,
-                         const FeatureEdit& edit, const EditOptions& options) {
-  check_layer(mesh, labels, surfaces, adjacency, relations);
+EditResult edit_once(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                     const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations,
+                     const FeatureEdit& edit, const EditOptions& options) {
   const Propagation propagation = propagate_edit(mesh, labels, surfaces, adjacency, relations, edit, options);
   MovedVertices moved = move_vertices(mesh, labels, adjacency, surfaces, propagation);
   const std::vector<double> sides = facing_sides(mesh, labels, surfaces);
@@ -153,6 +153,79 @@ EditResult edit_features(const TriangleMesh& mesh, const std::vector<int>& label
     refuse_inverted(result.mesh, result.labels, result.surfaces, sides, edited, edit.features);
   result.vertex_deviation = vertex_deviation(result.mesh, result.labels, result.surfaces);
   return result;
+}
+
+// The value of an absolute parameter of a surface (radius, tube radius, half-angle).
+double parameter_value(const Surface& s, EditParameter parameter) {
+  switch (parameter) {
+    case EditParameter::Radius: return s.radius;
+    case EditParameter::MinorRadius: return s.minor;
+    case EditParameter::HalfAngle: return s.half_angle;
+    default: return 0.0;
+  }
+}
+
+// Step `i` of `steps` of `edit`, applied to the layer after step i - 1: a share of the offset, the
+// parameter on its way from where it was, and the motion M(s) = (rotation by s times its angle,
+// s times its translation) from s = (i - 1) / steps to i / steps.
+FeatureEdit step_of(const FeatureEdit& edit, const std::vector<Surface>& original, int i, int steps) {
+  FeatureEdit step = edit;
+  const double s = static_cast<double>(i) / steps, r = static_cast<double>(i - 1) / steps;
+  if (edit.parameter == EditParameter::Offset) {
+    step.value = edit.value / steps;
+  } else if (edit.parameter != EditParameter::None) {
+    const double start = parameter_value(original[edit.features[0]], edit.parameter);
+    step.value = start + s * (edit.value - start);
+  }
+  const Eigen::AngleAxisd turn(edit.motion.linear());
+  auto along = [&](double share) {
+    Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+    m.linear() = Eigen::AngleAxisd(share * turn.angle(), turn.axis()).toRotationMatrix();
+    m.translation() = share * edit.motion.translation();
+    return m;
+  };
+  step.motion = along(s) * along(r).inverse();
+  return step;
+}
+
+EditResult edit_in_steps(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                         const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations,
+                         const FeatureEdit& edit, const EditOptions& options, int steps) {
+  EditResult result{mesh, labels, surfaces, std::vector<char>(surfaces.size(), 0), {}, options.target_edge_lengths, ""};
+  EditOptions each = options;
+  for (int i = 1; i <= steps; ++i) {
+    EditResult next =
+        edit_once(result.mesh, result.labels, result.surfaces, adjacency, relations, step_of(edit, surfaces, i, steps), each);
+    for (size_t f = 0; f < next.changed.size(); ++f) next.changed[f] |= result.changed[f];
+    if (!result.remeshing_problem.empty() && next.remeshing_problem.empty()) next.remeshing_problem = result.remeshing_problem;
+    each.target_edge_lengths = next.target_edge_lengths;  // the first step's density throughout
+    result = std::move(next);
+  }
+  return result;
+}
+
+}  // namespace
+
+EditResult edit_features(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                         const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations,
+                         const FeatureEdit& edit, const EditOptions& options) {
+  check_layer(mesh, labels, surfaces, adjacency, relations);
+  try {
+    return edit_once(mesh, labels, surfaces, adjacency, relations, edit, options);
+  } catch (const InvertedTriangles& whole) {
+    // Too large a change for the mesh at once, or impossible: in 2, 4 and 8 steps, each remeshed
+    // before the next, a border crosses a half, a quarter, an eighth as many triangles. Three
+    // halvings bound the cost at 14 more runs; an impossible edit fails them all.
+    const bool steps_apply = options.remesh && (edit.parameter == EditParameter::None ||
+                                                edit.parameter == EditParameter::Offset || edit.features.size() == 1);
+    for (int steps = 2; steps_apply && steps <= kMostSteps; steps *= 2) {
+      try {
+        return edit_in_steps(mesh, labels, surfaces, adjacency, relations, edit, options, steps);
+      } catch (const InvertedTriangles&) {
+      }
+    }
+    throw EditConflict(whole.what());
+  }
 }
 
 }  // namespace idealize

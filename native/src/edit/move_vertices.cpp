@@ -1,13 +1,17 @@
 #include "edit/move_vertices.h"
 
+#include "core/parallel.h"
 #include "edit/contacts.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseLU>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <string>
 
 namespace idealize {
@@ -52,20 +56,35 @@ bool same_shape(const Surface& a, const Surface& b) {
 }
 
 // The correction of the free vertices (index >= 0, n_free of them), carried by `carried`, that
-// makes them the harmonic interpolation of their borders' misfit: a border vertex w (in `V`
-// already) pulls a free neighbour v by V(w) - carried(v) * w. A stretched wall's vertices (carried
+// makes them the harmonic interpolation of their borders' misfit: a placed vertex w (in `V`
+// already) pulls a free neighbour v by V(w) - carried(v) * w, and a free neighbour carried
+// otherwise by the difference of the carries. A stretched wall's vertices (carried
 // nowhere) spread its moved border over it; a moved feature's vertices follow where its border
 // lands (a fillet moved against a mitre with another). Mean value weights (Floater, "Mean value
 // coordinates", CAGD 2003): positive, and exact for a misfit that varies linearly over a flat
 // region, so that rows of vertices stay in order (uniform weights, blind to spacing, pushed a
-// wall's thin top row past its edge).
+// wall's thin top row past its edge). A free vertex on the border of two features (`around` holds
+// two) interpolates along that border only, by arc length (weights 1 / length towards the
+// neighbours on the same border or at its ends): a border that shortens between its corners
+// spreads its vertices evenly instead of piling them at a corner.
 Eigen::MatrixXd harmonic_correction(const TriangleMesh& mesh, const std::vector<int>& index, int n_free,
-                                    const std::vector<Eigen::Isometry3d>& carried, const MatrixX3d& V) {
+                                    const std::vector<Eigen::Isometry3d>& carried, const MatrixX3d& V,
+                                    const std::vector<std::vector<int>>& around) {
   std::vector<std::map<int, double>> weights(n_free);
+  const MeshTopology topology(mesh);
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (index[v] < 0 || around[v].size() != 2) continue;
+    for (const int* w = topology.vertex_neighbors_begin(v); w != topology.vertex_neighbors_end(v); ++w) {
+      const auto& b = around[*w];
+      const bool along = std::includes(b.begin(), b.end(), around[v].begin(), around[v].end());
+      const double length = (mesh.V.row(*w) - mesh.V.row(v)).norm();
+      if (along && length > 0.0) weights[index[v]][*w] += 1.0 / length;
+    }
+  }
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int c = 0; c < 3; ++c) {
       const int i = mesh.F(f, c), j = mesh.F(f, (c + 1) % 3), k = mesh.F(f, (c + 2) % 3);
-      if (index[i] < 0) continue;
+      if (index[i] < 0 || around[i].size() == 2) continue;
       const Eigen::Vector3d x = mesh.V.row(i), a = mesh.V.row(j).transpose() - x, b = mesh.V.row(k).transpose() - x;
       const double la = a.norm(), lb = b.norm();
       if (!(la > 0.0 && lb > 0.0)) continue;
@@ -73,30 +92,73 @@ Eigen::MatrixXd harmonic_correction(const TriangleMesh& mesh, const std::vector<
       weights[index[i]][j] += half / la;
       weights[index[i]][k] += half / lb;
     }
-  std::vector<Eigen::Triplet<double>> entries;
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_free, 3);
-  for (int v = 0; v < static_cast<int>(index.size()); ++v) {
-    if (index[v] < 0) continue;
-    double total = 0.0;
-    for (const auto& [w, weight] : weights[index[v]]) {
-      total += weight;
-      if (index[w] >= 0) {
-        entries.emplace_back(index[v], index[w], -weight);
-      } else {
-        const Eigen::Vector3d misfit = V.row(w).transpose() - carried[v] * Eigen::Vector3d(mesh.V.row(w).transpose());
-        rhs.row(index[v]) += weight * misfit.transpose();
-      }
+  // The free vertices of each feature's inside (or each border) make a system of their own,
+  // between placed vertices: solved apart, on both cores, largest first.
+  std::vector<int> vertex_of(n_free);
+  for (int v = 0; v < static_cast<int>(index.size()); ++v)
+    if (index[v] >= 0) vertex_of[index[v]] = v;
+  std::vector<int> component(n_free, -1);
+  std::vector<std::vector<int>> members;
+  for (int start = 0; start < n_free; ++start) {
+    if (component[start] >= 0) continue;
+    members.emplace_back();
+    std::vector<int> stack{start};
+    component[start] = static_cast<int>(members.size()) - 1;
+    while (!stack.empty()) {
+      const int i = stack.back();
+      stack.pop_back();
+      members.back().push_back(i);
+      for (const auto& [w, weight] : weights[i])
+        if (index[w] >= 0 && component[index[w]] < 0) {
+          component[index[w]] = component[start];
+          stack.push_back(index[w]);
+        }
     }
-    // A tiny pull to zero keeps a free region without any border (impossible on a closed mesh,
-    // possible on an open one) determined: 1e-12 of its weights.
-    entries.emplace_back(index[v], index[v], total * (1.0 + 1e-12));
   }
-  Eigen::SparseMatrix<double> L(n_free, n_free);
-  L.setFromTriplets(entries.begin(), entries.end());
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> solver;
-  solver.compute(L);
-  if (solver.info() != Eigen::Success) throw EditConflict("the edited features' vertices could not be placed");
-  return solver.solve(rhs);
+  std::vector<int> order(members.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return members[a].size() > members[b].size(); });
+  Eigen::MatrixXd correction = Eigen::MatrixXd::Zero(n_free, 3);
+  std::vector<char> failed(members.size(), 0);
+  on_two_threads(order, [&](int c) {
+    const std::vector<int>& rows = members[c];
+    std::map<int, int> position;
+    for (size_t r = 0; r < rows.size(); ++r) position[rows[r]] = static_cast<int>(r);
+    std::vector<Eigen::Triplet<double>> entries;
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), 3);
+    for (size_t r = 0; r < rows.size(); ++r) {
+      const int v = vertex_of[rows[r]];
+      double total = 0.0;
+      for (const auto& [w, weight] : weights[rows[r]]) {
+        total += weight;
+        const Eigen::Vector3d x = mesh.V.row(w).transpose();
+        if (index[w] >= 0) {
+          // A free neighbour carried otherwise (a wall's vertex beside the border a pushed face
+          // carries): its correction counts in v's frame, the difference of the carries known.
+          entries.emplace_back(static_cast<int>(r), position.at(index[w]), -weight);
+          rhs.row(static_cast<Eigen::Index>(r)) += weight * (carried[w] * x - carried[v] * x).transpose();
+        } else {
+          rhs.row(static_cast<Eigen::Index>(r)) += weight * (V.row(w).transpose() - carried[v] * x).transpose();
+        }
+      }
+      // A tiny pull to zero keeps a free region without any placed neighbour (a border loop with
+      // no corner, an open mesh's patch) determined: 1e-12 of its weights.
+      entries.emplace_back(static_cast<int>(r), static_cast<int>(r), total * (1.0 + 1e-12));
+    }
+    Eigen::SparseMatrix<double> L(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(rows.size()));
+    L.setFromTriplets(entries.begin(), entries.end());
+    Eigen::SparseLU<Eigen::SparseMatrix<double>> solver;
+    solver.compute(L);
+    if (solver.info() != Eigen::Success) {
+      failed[c] = 1;
+      return;
+    }
+    const Eigen::MatrixXd solved = solver.solve(rhs);
+    for (size_t r = 0; r < rows.size(); ++r) correction.row(rows[r]) = solved.row(static_cast<Eigen::Index>(r));
+  }, ProgressSpan());
+  if (std::any_of(failed.begin(), failed.end(), [](char f) { return f; }))
+    throw EditConflict("the edited features' vertices could not be placed");
+  return correction;
 }
 
 }  // namespace
@@ -156,18 +218,26 @@ MovedVertices move_vertices(const TriangleMesh& mesh, const std::vector<int>& la
   out.V = mesh.V;
   // Where each vertex goes before the correction: with its feature's motion, or where it is.
   std::vector<Eigen::Isometry3d> carried(nv, Eigen::Isometry3d::Identity());
-  std::vector<int> index(nv, -1);
-  int n_free = 0;
+  std::vector<char> free(nv, 0);
   for (int v = 0; v < nv; ++v) {
     const auto& a = around[v];
     const Eigen::Vector3d x = mesh.V.row(v).transpose();
     const bool any_changed = std::any_of(a.begin(), a.end(), [&](int f) { return changed[f]; });
+    const bool all_stretch = !a.empty() && std::all_of(a.begin(), a.end(), [&](int f) { return stretch[f]; });
     if (a.size() == 1 && (changed[a[0]] || stretch[a[0]])) {
       carried[v] = propagation.motions[a[0]];  // inside an edited feature: free, carried by it
-      index[v] = n_free++;
+      free[v] = 1;
+    } else if (a.size() == 2 && (any_changed || all_stretch)) {
+      // On the border of two edited features: free along it, carried by the changed one.
+      for (int f : a)
+        if (changed[f]) {
+          carried[v] = propagation.motions[f];
+          break;
+        }
+      free[v] = 1;
     } else if (any_changed) {
-      // On a changed feature's border: each changed feature carries the vertex with its motion onto
-      // its new surface, and the intersection of all its surfaces is searched from their mean.
+      // At a corner of a changed feature: each changed feature carries the vertex with its motion
+      // onto its new surface, and the intersection of all its surfaces is searched from their mean.
       Eigen::Vector3d guess = Eigen::Vector3d::Zero();
       int count = 0;
       for (int f : a)
@@ -176,12 +246,18 @@ MovedVertices move_vertices(const TriangleMesh& mesh, const std::vector<int>& la
           ++count;
         }
       out.V.row(v) = onto_features(a, after, g1, guess / count, length).transpose();
-    } else if (!a.empty() && std::all_of(a.begin(), a.end(), [&](int f) { return stretch[f]; })) {
-      index[v] = n_free++;  // between stretched features: free, in place
+    } else if (all_stretch) {
+      free[v] = 1;  // where stretched features meet: free, in place
     }
   }
-  if (n_free > 0) {
-    const Eigen::MatrixXd correction = harmonic_correction(mesh, index, n_free, carried, out.V);
+  // The borders first, between their corners; then the features' insides between their borders.
+  for (const bool border : {true, false}) {
+    std::vector<int> index(nv, -1);
+    int n_free = 0;
+    for (int v = 0; v < nv; ++v)
+      if (free[v] && (around[v].size() == 2) == border) index[v] = n_free++;
+    if (n_free == 0) continue;
+    const Eigen::MatrixXd correction = harmonic_correction(mesh, index, n_free, carried, out.V, around);
     for (int v = 0; v < nv; ++v)
       if (index[v] >= 0) {
         const Eigen::Vector3d x = carried[v] * Eigen::Vector3d(mesh.V.row(v).transpose()) +
@@ -238,7 +314,7 @@ void refuse_inverted(const TriangleMesh& mesh, const std::vector<int>& labels, c
   for (size_t i = 0; i < edit_of.size(); ++i)
     what += (i ? ", feature " : " feature ") + std::to_string(edit_of[i]) + " (" +
             surface_type_name(surfaces[edit_of[i]].type) + ")";
-  throw EditConflict(what + " would turn over " + inverted +
+  throw InvertedTriangles(what + " would turn over " + inverted +
                      ": the change is larger than that face allows; the layer is unchanged");
 }
 

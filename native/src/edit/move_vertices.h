@@ -39,13 +39,21 @@ Eigen::Vector3d onto_features(const std::vector<int>& features, const std::vecto
 std::vector<double> facing_sides(const TriangleMesh& mesh, const std::vector<int>& labels,
                                  const std::vector<Surface>& surfaces);
 
+// An edit that turns triangles over: the change is too large for the mesh as it is (a border moved
+// across more triangles than the remeshing can relocate), or impossible (a face pushed past the one
+// behind it). Edits in smaller steps tell the two apart.
+class InvertedTriangles : public EditConflict {
+ public:
+  using EditConflict::EditConflict;
+};
+
 // "N triangles of feature F (type)": the feature with the most triangles of an `edited` feature
 // that face against its surface's side `sides`; empty when none does.
 std::string inverted_triangles(const TriangleMesh& mesh, const std::vector<int>& labels,
                                const std::vector<Surface>& surfaces, const std::vector<double>& sides,
                                const std::vector<char>& edited);
 
-// Throws EditConflict naming the edited features `edit_of` and the feature with the most triangles
+// Throws InvertedTriangles naming the edited features `edit_of` and the feature with the most triangles
 // turned over: triangles of an `edited` feature that face against its surface's side `sides` (a
 // face pushed past the one behind it turns the walls between inside out).
 void refuse_inverted(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
