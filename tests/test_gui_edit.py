@@ -24,8 +24,10 @@ def wait(seconds):
 def layer_state(doc, layer, solid):
     table = json.loads(layer.FeatureTable)
     top = table["features"][CONFIG_TOP[0]]["params"]["point"][2] if CONFIG_TOP else None
+    primitives = doc.getObject("Plate_Primitives")
     return {"top": top, "edits": len(json.loads(layer.Edits)) if layer.Edits else 0,
-            "volume": solid.Shape.Volume, "valid": solid.Shape.isValid(), "facets": layer.Mesh.CountFacets}
+            "volume": solid.Shape.Volume, "valid": solid.Shape.isValid(), "facets": layer.Mesh.CountFacets,
+            "primitives_top": max(o.Shape.BoundBox.ZMax for o in primitives.Group)}
 
 
 CONFIG_TOP = []
@@ -55,6 +57,8 @@ def run():
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(doc.Name, layer.Name, "Facet%d" % facet)
     result["layer_visible_before"] = layer.ViewObject.Visibility
+    graph = Gui.ActiveDocument.ActiveView.getSceneGraph()
+    children = graph.getNumChildren()
     Gui.runCommand("Idealize_PushPull")
     wait(0.3)
     result["dialog_open"] = bool(Gui.Control.activeDialog())
@@ -63,8 +67,13 @@ def run():
     if form is None:
         return
     result["feature_text"] = form.findChild(QtGui.QLabel, "feature").text()
-    graph = Gui.ActiveDocument.ActiveView.getSceneGraph()
-    children = graph.getNumChildren()
+    result["arrow_nodes"] = graph.getNumChildren() - children
+    # Dragging the arrow pulls the face: its offset shows in the panel.
+    from idealize.gui import task_push_pull
+    arrow = task_push_pull.active_panel.dragger
+    arrow.dragger.translation.setValue(3.0 / arrow.size, 0.0, 0.0)
+    wait(0.5)
+    result["dragged_value"] = form.findChild(QtGui.QDoubleSpinBox, "value").value()
     form.findChild(QtGui.QDoubleSpinBox, "value").setValue(5.0)
     wait(1.5)
     result["preview"] = {"status": form.findChild(QtGui.QLabel, "status").text(),
@@ -122,6 +131,10 @@ def push_pull_run(tmp_path_factory):
     return result
 
 
+def test_dragging_the_arrow_sets_the_offset(push_pull_run):
+    assert push_pull_run["dragged_value"] == pytest.approx(3.0, abs=1e-3)
+
+
 def test_the_command_opens_the_panel_on_the_selected_face(push_pull_run):
     assert push_pull_run["dialog_open"] and push_pull_run["panel_found"]
     assert ", plane: normal (0, 0, 1), offset 20" in push_pull_run["feature_text"]
@@ -129,10 +142,11 @@ def test_the_command_opens_the_panel_on_the_selected_face(push_pull_run):
 
 def test_the_panel_previews_the_edit_and_names_a_conflict(push_pull_run):
     preview = push_pull_run["preview"]
-    assert preview["status"].startswith("Preview") and preview["added_nodes"] == 1 and preview["layer_hidden"]
+    assert push_pull_run["arrow_nodes"] == 1  # the arrow on the picked face
+    assert preview["status"].startswith("Preview") and preview["added_nodes"] == 2 and preview["layer_hidden"]
     conflict = push_pull_run["conflict"]
     assert conflict["status"].startswith("Cannot apply") and "feature" in conflict["status"]
-    assert conflict["added_nodes"] == 0
+    assert conflict["added_nodes"] == 1  # the preview went, the arrow stays
 
 
 def test_ok_edits_the_layer_and_regenerates_the_solid_in_one_undo_step(push_pull_run):
@@ -140,15 +154,17 @@ def test_ok_edits_the_layer_and_regenerates_the_solid_in_one_undo_step(push_pull
     assert before["top"] == pytest.approx(20.0) and before["volume"] == pytest.approx(VOLUME, rel=1e-3)
     assert after["top"] == pytest.approx(25.0, abs=1e-4) and after["edits"] == 1
     assert after["volume"] == pytest.approx(PULLED, rel=1e-3) and after["valid"]
+    assert before["primitives_top"] == pytest.approx(20.0, abs=1e-4)
+    assert after["primitives_top"] == pytest.approx(25.0, abs=1e-4)  # the primitives follow
     assert after["undo_steps"] == 1 and after["undo_name"] == "Push/Pull"
     # The panel closed, its preview gone, and the layer shown as it was before.
-    assert not after["dialog_open"] and after["added_nodes"] == 0
+    assert not after["dialog_open"] and after["added_nodes"] == 0  # no preview, no arrow left
     assert after["layer_visible"] == push_pull_run["layer_visible_before"]
 
 
 def test_undo_and_redo_restore_the_layer_and_the_solid(push_pull_run):
     before, undone, redone, after = (push_pull_run[k] for k in ("before", "undone", "redone", "after"))
-    for key in ("top", "edits", "volume", "facets"):
+    for key in ("top", "edits", "volume", "facets", "primitives_top"):
         assert undone[key] == pytest.approx(before[key]), key
         assert redone[key] == pytest.approx(after[key]), key
 

@@ -102,10 +102,27 @@ def make_primitives(doc, source_obj, layer):
     """Add an App::DocumentObjectGroup "<Label>_Primitives" holding one Part::Feature per
     feature (named "F<id>_<type>"), placed and sized by the idealized parameters (a freeform
     feature's is its fitted B-spline face, when one fits)."""
-    mesh = layer.mesh
-    labels = np.asarray(layer.labels)
     group = doc.addObject("App::DocumentObjectGroup", source_obj.Name + "_Primitives")
     group.Label = source_obj.Label + "_Primitives"
+    _add_primitives(doc, group, layer)
+    return group
+
+
+def refill_primitives(group, layer):
+    """Replace the primitives of a group :func:`make_primitives` made by those of `layer` (an
+    edited layer's); they stay hidden, as the solid's commands leave them."""
+    doc = group.Document
+    for obj in list(group.Group):
+        doc.removeObject(obj.Name)
+    _add_primitives(doc, group, layer)
+    for obj in group.Group:
+        if getattr(obj, "ViewObject", None) is not None:
+            obj.ViewObject.Visibility = False
+
+
+def _add_primitives(doc, group, layer):
+    mesh = layer.mesh
+    labels = np.asarray(layer.labels)
     for feature in layer.features:
         faces = mesh.faces[labels == feature["id"]]
         if not len(faces):
@@ -119,7 +136,6 @@ def make_primitives(doc, source_obj, layer):
         obj = doc.addObject("Part::Feature", "F%d_%s" % (feature["id"], feature["type"]))
         obj.Shape = shape
         group.addObject(obj)
-    return group
 
 
 def make_solid_object(doc, source_obj, layer=None, solid=None, with_primitives=True):

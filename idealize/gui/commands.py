@@ -250,8 +250,8 @@ class MakeSolidCommand(_LayerOrMeshCommand):
 
 
 def _selected_layer_feature():
-    """(layer object, feature id) of the one facet of a feature layer selected in the 3D view, or
-    None."""
+    """(layer object, feature id, facet) of the one facet of a feature layer selected in the 3D
+    view, or None."""
     selection = FreeCADGui.Selection.getSelectionEx()
     if len(selection) != 1 or not layer_object.is_feature_layer(selection[0].Object):
         return None
@@ -262,7 +262,7 @@ def _selected_layer_feature():
     labels = obj.Labels
     if not 0 <= facet < len(labels) or labels[facet] < 0:
         return None
-    return obj, int(labels[facet])
+    return obj, int(labels[facet]), facet
 
 
 class PushPullCommand:
@@ -282,9 +282,9 @@ class PushPullCommand:
         selected = _selected_layer_feature()
         if selected is None:
             return
-        obj, feature = selected
+        obj, feature, facet = selected
         try:
-            panel = PushPullPanel(obj, feature)
+            panel = PushPullPanel(obj, feature, facet)
         except Exception as error:
             report_error("Push/Pull", error)
             return

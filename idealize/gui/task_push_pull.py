@@ -1,6 +1,7 @@
 """Task panel of Push/Pull (Resources/ui/PushPull.ui): edits one feature of a feature layer, its
 offset along its normal or one of its parameters, with the relations to keep. A preview of the
 edited mesh replaces the layer in the 3D view as the value changes; a conflict shows in the panel.
+An arrow on the picked point (a Coin3D dragger) pulls the face along its normal when dragged.
 OK applies the edit as one undo step and regenerates the B-rep solids made from the layer's source.
 """
 import math
@@ -38,8 +39,12 @@ def edit_step(feature, parameter, value, keep):
 
 def regenerate_solids(obj, layer):
     """Rebuild the shape of every B-rep solid made from the layer's source (Part::Features with
-    IdealizeSolid linked to it) from the edited `layer`. Returns how many."""
+    IdealizeSolid linked to it) from the edited `layer`, and its primitives. Returns how many."""
     count = 0
+    if obj.Source is not None:
+        group = obj.Document.getObject(obj.Source.Name + "_Primitives")
+        if group is not None and group.isDerivedFrom("App::DocumentObjectGroup"):
+            freecad_solid.refill_primitives(group, layer)
     for other in obj.Document.Objects:
         if hasattr(other, "IdealizeSolid") and getattr(other, "Source", None) == obj.Source:
             solid = make_solid(layer)
@@ -95,8 +100,59 @@ class Preview:
             self.shown = False
 
 
+class NormalDragger:
+    """A Coin3D arrow at the picked point along the face's outward normal: dragging it pulls the
+    face (its offset, in mm, goes to `changed`); `show(distance)` puts it where a typed value is."""
+
+    def __init__(self, view, point, normal, size, changed):
+        from pivy import coin
+        self.view, self.changed, self.size = view, changed, size
+        self.node = coin.SoSeparator()
+        transform = coin.SoTransform()
+        transform.translation.setValue(*[float(x) for x in point])
+        # The dragger moves along its local x axis: turn x onto the normal.
+        transform.rotation.setValue(coin.SbRotation(coin.SbVec3f(1, 0, 0), coin.SbVec3f(*[float(x) for x in normal])))
+        transform.scaleFactor.setValue(size, size, size)
+        self.dragger = coin.SoTranslate1Dragger()
+        self.node.addChild(transform)
+        self.node.addChild(self.dragger)
+        self.quiet = False
+        self.sensor = coin.SoFieldSensor(self._moved, None)
+        self.sensor.attach(self.dragger.translation)
+        view.getSceneGraph().addChild(self.node)
+
+    def _moved(self, data, sensor):
+        if not self.quiet:
+            self.changed(round(self.dragger.translation.getValue()[0] * self.size, 4))
+
+    def show(self, distance):
+        self.quiet = True
+        self.dragger.translation.setValue(distance / self.size, 0.0, 0.0)
+        self.quiet = False
+
+    def remove(self):
+        self.sensor.detach()
+        self.view.getSceneGraph().removeChild(self.node)
+
+
+def picked_frame(layer, facet):
+    """The centroid of a facet of the layer's mesh and its outward unit normal (the mesh's
+    orientation, turned outward when the mesh faces in)."""
+    V, F = layer.idealized_vertices, np.asarray(layer.oriented_faces)
+    corners = V[F[facet]]
+    normal = np.cross(corners[1] - corners[0], corners[2] - corners[0])
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    if np.einsum("ij,ij->i", a, np.cross(b, c)).sum() < 0:
+        normal = -normal
+    return corners.mean(axis=0), normal / max(np.linalg.norm(normal), 1e-300)
+
+
+#: The panel open now (None when none is): for macros and tests.
+active_panel = None
+
+
 class PushPullPanel:
-    def __init__(self, obj, feature_id):
+    def __init__(self, obj, feature_id, facet=None):
         from PySide import QtCore, QtGui
         self.obj = obj
         self.layer = layer_object.feature_layer(obj)
@@ -119,7 +175,15 @@ class PushPullPanel:
         self.timer.timeout.connect(self.update_preview)
         self.preview = Preview(obj)
         self.edited = None
+        self.dragger = None
+        if facet is not None:
+            # About a twentieth of the part: visible, and short of the features around it.
+            size = 0.05 * float(np.linalg.norm(np.ptp(self.layer.mesh.vertices, axis=0)))
+            point, normal = picked_frame(self.layer, facet)
+            self.dragger = NormalDragger(self.preview.view, point, normal, size, self.dragged)
         self.parameter_changed(0)
+        global active_panel
+        active_panel = self
 
     # --- values
     def parameter(self):
@@ -128,8 +192,16 @@ class PushPullPanel:
     def keep(self):
         return {name: getattr(self.form, name).isChecked() for name in edit.RELATIONS}
 
+    def dragged(self, distance):
+        """The arrow was dragged: a push/pull by `distance`."""
+        if self.parameter()[1] != "offset":
+            self.form.parameter.setCurrentIndex(0)
+        self.form.value.setValue(distance)
+
     def parameter_changed(self, index):
         _, name, degrees = self.choices[index]
+        if self.dragger is not None:
+            self.dragger.show(0.0)
         value = 0.0 if name == "offset" else float(self.feature["params"][name])
         self.form.value.blockSignals(True)
         self.form.value.setSuffix(" °" if degrees else " mm")
@@ -150,6 +222,8 @@ class PushPullPanel:
 
     # --- preview
     def schedule(self, *args):
+        if self.dragger is not None and self.parameter()[1] == "offset":
+            self.dragger.show(self.form.value.value())
         self.timer.start(PREVIEW_DELAY_MS)
 
     def update_preview(self):
@@ -203,6 +277,11 @@ class PushPullPanel:
         return self._close()
 
     def _close(self):
+        global active_panel
         self.preview.hide()
+        if self.dragger is not None:
+            self.dragger.remove()
+            self.dragger = None
+        active_panel = None
         FreeCADGui.Control.closeDialog()
         return True
