@@ -89,6 +89,17 @@ Surface posed(const Surface& s, const Eigen::VectorXd& x, FreeShape free, Eigen:
 
 }  // namespace
 
+std::vector<std::vector<int>> features_around(const TriangleMesh& mesh, const std::vector<int>& labels) {
+  std::vector<std::vector<int>> around(mesh.num_vertices());
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 3 && labels[f] >= 0; ++c) {  // (-1: a triangle set aside, no feature)
+      auto& a = around[mesh.F(f, c)];
+      if (std::find(a.begin(), a.end(), labels[f]) == a.end()) a.push_back(labels[f]);
+    }
+  for (auto& a : around) std::sort(a.begin(), a.end());
+  return around;
+}
+
 double rolling_radius(const Surface& surface) {
   return rolls(surface) ? roll_of(surface) : std::numeric_limits<double>::infinity();
 }
@@ -114,13 +125,7 @@ Eigen::Vector3d contact_point(const Surface& roller, const Surface& other, const
 std::vector<Contact> tangent_contacts(const TriangleMesh& mesh, const std::vector<int>& labels,
                                       const std::vector<Surface>& surfaces,
                                       const std::vector<std::array<int, 2>>& pairs, int max_samples) {
-  // The features around each vertex.
-  std::vector<std::vector<int>> around(mesh.num_vertices());
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int c = 0; c < 3 && labels[f] >= 0; ++c) {
-      auto& a = around[mesh.F(f, c)];
-      if (std::find(a.begin(), a.end(), labels[f]) == a.end()) a.push_back(labels[f]);
-    }
+  const std::vector<std::vector<int>> around = features_around(mesh, labels);
   // The vertices each pair shares, in one pass over the vertices.
   std::map<std::pair<int, int>, std::vector<int>> shared;
   for (const auto& [a, b] : pairs) shared[{std::min(a, b), std::max(a, b)}];

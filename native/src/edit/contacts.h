@@ -30,6 +30,10 @@ struct Contact {
   std::vector<double> sides;  // +1 or -1: which side of the other surface the spine lies on
 };
 
+// The features around each vertex of `mesh` (its faces' labels; -1, a triangle set aside, is no
+// feature), sorted.
+std::vector<std::vector<int>> features_around(const TriangleMesh& mesh, const std::vector<int>& labels);
+
 // The rolling radius of a surface: a cylinder's or sphere's radius, a torus's tube radius; infinite
 // for planes and cones, which never roll.
 double rolling_radius(const Surface& surface);

@@ -17,18 +17,6 @@
 namespace idealize {
 namespace {
 
-// The features around each vertex, sorted.
-std::vector<std::vector<int>> features_around(const TriangleMesh& mesh, const std::vector<int>& labels) {
-  std::vector<std::vector<int>> around(mesh.num_vertices());
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int c = 0; c < 3 && labels[f] >= 0; ++c) {  // (-1: a triangle set aside, no feature)
-      auto& a = around[mesh.F(f, c)];
-      if (std::find(a.begin(), a.end(), labels[f]) == a.end()) a.push_back(labels[f]);
-    }
-  for (auto& a : around) std::sort(a.begin(), a.end());
-  return around;
-}
-
 // Gauss-Newton steps of least norm onto the zero sets of `surfaces` (a point on all of them).
 Eigen::Vector3d least_norm_steps(const std::vector<const Surface*>& surfaces, Eigen::Vector3d p, double length) {
   const int k = static_cast<int>(surfaces.size());
@@ -203,7 +191,7 @@ MovedVertices move_vertices(const TriangleMesh& mesh, const std::vector<int>& la
                             const Propagation& propagation) {
   const std::vector<Surface>& after = propagation.surfaces;
   const std::vector<char>& changed = propagation.changed;
-  const double length = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
+  const double length = bounding_box_diagonal(mesh);
   // Features that did not change but border one that did stretch with it.
   std::vector<char> stretch(before.size(), 0);
   std::set<std::pair<int, int>> g1;

@@ -11,11 +11,6 @@
 namespace idealize {
 namespace {
 
-double diagonal(const TriangleMesh& mesh) {
-  if (mesh.num_vertices() == 0) return 0.0;
-  return (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
-}
-
 double signed_volume(const TriangleMesh& mesh) {
   double volume = 0.0;
   for (int f = 0; f < mesh.num_faces(); ++f) {
@@ -111,7 +106,7 @@ struct Propagator {
     out.changed.assign(n, 0);
     determined.assign(n, 0);
     driven.assign(n, 0);
-    length = std::max(diagonal(mesh), 1e-300);
+    length = std::max(bounding_box_diagonal(mesh), 1e-300);
     // A contact untouched by the edit holds to the rounding of its distances (about 1e-15 of the
     // part); 1e-9 of it tells it from one the edit moved by any length worth a vertex.
     settle = 1e-9 * length;

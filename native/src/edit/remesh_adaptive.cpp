@@ -100,7 +100,7 @@ RemeshedLayer remesh_adaptive(const TriangleMesh& mesh, const std::vector<int>& 
     constrained_edge[e] = sm.is_border(h) || sm.is_border(o) || patch[sm.face(h)] != patch[sm.face(o)];
   }
   for (VertexIndex v : sm.vertices()) constrained_vertex[v] = features_at(sm, patch, v).size() >= 3 || sm.is_border(v);
-  const double length = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
+  const double length = bounding_box_diagonal(mesh);
   const OntoFeatures project{&sm, patch, &surfaces, &g1, length};
   for (size_t feature = 0; feature < target_edge_length.size(); ++feature) {
     if (!(target_edge_length[feature] > 0.0)) continue;
