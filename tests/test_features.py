@@ -1040,6 +1040,22 @@ def test_the_mesh_kind_and_noise_are_decided_once_and_stored():
 
 
 @needs_freecad
+@pytest.mark.parametrize("triangles", [8000, 25000])
+def test_a_remesh_without_noise_is_a_measured_surface_with_one_feature_per_face(triangles):
+    """A uniform remesh whose vertices lie exactly on the part (a clean reconstruction, or a CAD
+    part remeshed for display) fits its surfaces exactly inside its patches, but its triangles
+    straddle the part's edges: it is measured, and gives one feature per face (as its exact
+    tessellation would), not a piece per straddling triangle."""
+    solid = shapes.bracket_solid()
+    V, F, gt, _ = shapes.uniform_remesh(solid, triangles)
+    layer = idealize.idealize(idealize.Mesh(V, F))
+    assert layer.mesh_kind == "measured surface"
+    assert len(layer.features) == len(solid.Faces)
+    assert correct_faces(np.asarray(layer.labels), gt, shapes.triangle_areas(V, F)) == len(solid.Faces)
+    assert all(f["type"] != "freeform" for f in layer.features)
+
+
+@needs_freecad
 def test_form_deviation_sees_undulation_and_not_noise():
     """A scan's noise does not correlate between neighbouring vertices; a sculpted part's undulation
     does, and moves whole features off their ideal surfaces: form_deviation measures that."""
