@@ -1055,6 +1055,22 @@ def test_a_remesh_without_noise_is_a_measured_surface_with_one_feature_per_face(
     assert all(f["type"] != "freeform" for f in layer.features)
 
 
+@shapes.needs_shared_data
+@pytest.mark.parametrize("name, counted", [("block.stl", 13), ("joint.stl", 12), ("fandisk.obj", 24)])
+def test_clean_remeshes_of_real_parts_give_the_faces_a_person_counts(name, counted):
+    """Real meshes nobody here wrote: CAD parts remeshed uniformly, their vertices on the part and
+    their triangles across its edges. The layer holds about the faces a person counts on them
+    (within a quarter), and almost none of the area is freeform: the faces that straddle the edges
+    go to the faces beside them, not to strings of small features or one feature along every edge."""
+    mesh = idealize.load_mesh(str(shapes.SHARED_STEP.parent / "mesh" / name))
+    layer = idealize.idealize(mesh)
+    assert 0.75 * counted <= len(layer.features) <= 1.25 * counted
+    area = np.array([f["area"] for f in layer.features])
+    freeform = sum(f["area"] for f in layer.features if f["type"] == "freeform")
+    assert freeform < 0.05 * area.sum()
+    assert area.max() < 0.5 * area.sum()
+
+
 @needs_freecad
 def test_form_deviation_sees_undulation_and_not_noise():
     """A scan's noise does not correlate between neighbouring vertices; a sculpted part's undulation

@@ -85,7 +85,12 @@ std::vector<FloodSurface> FeatureState::flood_surfaces() const {
   std::vector<FloodSurface> surfaces(layer.features.size());
   for (size_t p = 0; p < surfaces.size(); ++p) {
     const Feature& f = layer.features[p];
-    surfaces[p].surface = f.type == SurfaceType::Freeform ? nullptr : &f.surface;
+    // On a measured surface without noise (a clean remesh) the spreads of the surfaces that fit are
+    // next to nothing, and a face that straddles a sharp edge is all but impossible under each: a
+    // surface that does not fit its own faces would take them all, in units of its large spread,
+    // all along the part's edges. There it keeps its faces and takes none.
+    const bool unfit = noiseless && f.rms > split_above;
+    surfaces[p].surface = f.type == SurfaceType::Freeform || unfit ? nullptr : &f.surface;
     surfaces[p].distance_unit = std::max(noise, f.spread);
     surfaces[p].angle_unit = std::max(normal_noise, f.normal_spread);
   }

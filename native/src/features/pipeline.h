@@ -23,6 +23,7 @@
 #include "features/patch_points.h"
 #include "features/relaxation.h"
 
+#include <limits>
 #include <vector>
 
 namespace idealize {
@@ -56,8 +57,11 @@ struct FeatureState {
   // The mesh's kind and noise, decided by the split stage from the typical patch's fit: an exact
   // tessellation (its vertices on their faces, as a CAD export's) or a measured surface.
   bool exact_mesh = false;
+  bool noiseless = false;     // the typical patch fits to a hundredth of the tolerance (exact or not)
   double noise = 0.0;         // the typical patch's spread (distance)
   double normal_noise = 0.0;  // and its normals' (radians)
+  // The RMS distance above which a surface does not fit its patch (decided with the noise; none before).
+  double split_above = std::numeric_limits<double>::infinity();
   int patches = 0;            // features after splitting; merging keeps their ids until `settle`
   bool rimless = false;       // whether `points` leave out a ring of faces along every rim
 
@@ -71,7 +75,8 @@ struct FeatureState {
   // Refits the surfaces of the patches that changed (same type, starting from the previous fit) to
   // `points`.
   void refit_changed(const std::vector<char>& changed, const ProgressSpan& span);
-  // The surfaces of the features with their spreads, at least the mesh's noise.
+  // The surfaces of the features with their spreads, at least the mesh's noise; none for a freeform
+  // feature, nor, on a noiseless measured surface, for one whose surface does not fit it.
   std::vector<FloodSurface> flood_surfaces() const;
   // On a noisy mesh, dissolves the patches that the surfaces around them explain (relaxation.h) and
   // refits the changed ones without their rims; returns whether `points` are those rim-less points.

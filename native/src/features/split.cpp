@@ -565,8 +565,8 @@ bool decide_mesh_kind(FeatureState& s) {
   std::nth_element(rms.begin(), rms.begin() + middle, rms.end());
   std::nth_element(normal_rms.begin(), normal_rms.begin() + middle, normal_rms.end());
   std::nth_element(farthest.begin(), farthest.begin() + middle, farthest.end());
-  s.exact_mesh = rms[middle] < kExactFraction * s.layer.distance_tolerance &&
-                 (farthest[middle] < s.exact_distance || !uniformly_sampled(s.mesh));
+  s.noiseless = rms[middle] < kExactFraction * s.layer.distance_tolerance;
+  s.exact_mesh = s.noiseless && (farthest[middle] < s.exact_distance || !uniformly_sampled(s.mesh));
   s.noise = rms[middle] + s.floor;
   s.normal_noise += normal_rms[middle];
   return true;
@@ -705,6 +705,7 @@ void split_badly_fitting(FeatureState& s) {
   // sliver facets beside a plane moves its RMS and its normals' by less than their tiny area.
   splitting.split_normals_above =
       s.exact_mesh ? s.options.split_ratio * s.normal_noise : std::numeric_limits<double>::infinity();
+  s.split_above = splitting.split_above;
   try_lemons(splitting);
   const int next_id = split_patches(splitting, split.sub(0.0, 0.5));
   if (next_id > s.num_patches) identify_pieces(splitting, next_id, split);

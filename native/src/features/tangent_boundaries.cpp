@@ -71,6 +71,9 @@ int settle_tangent_boundaries(const TriangleMesh& mesh, const MeshTopology& topo
   for (const FeatureRelation& r : relations) {
     if (r.kind != "tangent" || r.features.size() != 2) continue;
     const int a = std::min(r.features[0], r.features[1]), b = std::max(r.features[0], r.features[1]);
+    // A feature retyped freeform keeps the surface it was fitted with, which no longer stands for it:
+    // its faces are not that surface's (the mesh's normals may still call it tangent to a neighbour).
+    if (features[a].type == SurfaceType::Freeform || features[b].type == SurfaceType::Freeform) continue;
     std::optional<Separator> s = separator(features[a].surface, features[b].surface);
     if (!s) continue;
     // Oriented so that b lies on the positive side, by where the patch of the more curved surface
