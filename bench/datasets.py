@@ -1,6 +1,6 @@
 """Labelled triangle meshes for the segmentation benchmark.
 
-Every STEP part under ``<data>/step`` gives three meshes whose triangles carry the index of the
+Every STEP part under ``<data>/step`` gives five meshes whose triangles carry the index of the
 B-rep face they lie on (the ground truth):
 
 ``cad``
@@ -17,10 +17,21 @@ B-rep face they lie on (the ground truth):
     The same remeshed surface with smooth low-frequency undulations along the vertex normals
     (three sinusoids of wavelength diag/2 .. diag in random directions, scaled so the largest
     displacement is 0.3 % of the diagonal), as left by free-hand sculpting.
+``mcscan``
+    A scanner's surface reconstruction instead of a remesh: the signed distance to the fine
+    tessellation sampled on a regular grid of random phase, its zero level set extracted by
+    marching cubes (Lewiner) with about as many triangles as ``scan``, labelled like ``scan``, then
+    the same Gaussian noise.
+``mcsculpt``
+    The same marching-cubes surface with the undulations of ``sculpt``.
 
 Random numbers come from ``numpy.random.default_rng`` seeded with a CRC-32 of the part and
-variant names, so every mesh is reproducible. Generated meshes are cached as ``.npz`` files under
+variant names (the marching-cubes grid's phase: of the part and "marching-cubes", one grid for both
+variants), so every mesh is reproducible. Generated meshes are cached as ``.npz`` files under
 ``bench/cache/`` keyed by the part file's contents and every generation parameter.
+
+Marching cubes comes from scikit-image (Debian's python3-skimage), the flood fill of the signed
+distance from scipy.
 
 FreeCAD 0.20 is imported from Debian's ``/usr/lib/freecad-python3/lib``; ``FreeCAD`` has to be
 imported before ``Part``/``Mesh``/``MeshPart`` or the interpreter crashes, so always go through
@@ -34,6 +45,7 @@ import json
 import math
 import os
 import sys
+import time
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -50,7 +62,11 @@ FREECAD_LIB = "/usr/lib/freecad-python3/lib"
 # Bump when the generation code changes in a way that changes the meshes: invalidates the cache.
 DATASET_VERSION = 1
 
-VARIANTS = ("cad", "scan", "sculpt")
+VARIANTS = ("cad", "scan", "sculpt", "mcscan", "mcsculpt")
+# What run_brep.py runs without --variant: a solid that stays faceted (most marching-cubes ones
+# do) takes 1-2 minutes there, most of it Hausdorff distances and reading its STEP back, which
+# would add hours. The other benchmarks run all VARIANTS.
+BASE_VARIANTS = ("cad", "scan", "sculpt")
 
 # Generation parameters, all relative to the bounding-box diagonal of the part.
 CAD_LINEAR_DEFLECTION = 1e-3      # x diag
@@ -62,6 +78,19 @@ REMESH_ITERATIONS = 4
 SCAN_NOISE_SIGMA = 1e-3           # x diag, Gaussian, along vertex normals
 SCULPT_AMPLITUDE = 3e-3           # x diag, maximum displacement
 SCULPT_WAVES = 3
+# Marching cubes (mcscan, mcsculpt): the zero level set of a signed distance sampled on a regular
+# grid of spacing h, h = sqrt(MC_TRIANGLES_PER_CELL * area / MC_TRIANGLES).
+MC_TRIANGLES = 46_000             # target triangle count, the scan variant's median (its range: 41k-53k)
+# Lewiner marching cubes gives 2.0-2.95 triangles per h**2 of surface, median 2.25: measured on the
+# 61 parts of the test data. Parts of planes are near 2 (a plane square to the grid gives exactly 2,
+# an oblique one a little more), parts of cylinders, blends and tori 2.4-2.95. With 2.25 the first
+# counts are 41k-60k; the ~15 parts more than 10 % off get a second grid, which ends them at 41k-50k.
+MC_TRIANGLES_PER_CELL = 2.25
+MC_COUNT_TOLERANCE = 0.1          # a count further off the target than this: once more with h scaled by the miss
+MC_LOST_VOLUME = 0.05             # a volume further off the part's: walls thinner than h lost, the part is skipped
+MC_PAD_CELLS = 2                  # empty cells around the bounding box
+MC_NEAR_CELLS = 2.0               # x h: signed distances are clamped to +-this; beyond 3 cells only the sign is known
+MC_SAMPLE_SPACING = 0.5           # x h: surface samples that mark the grid cells near the surface
 SCALING_TRIANGLES = (10_000, 75_000, 300_000, 1_000_000)
 SCALING_COUNT_TOLERANCE = 0.03  # timing meshes are within 3 % of the triangle count they are labelled with ...
 SCALING_COUNT_TRIES = 3         # ... after at most this many more requests to the remeshing
@@ -76,14 +105,14 @@ class DatasetError(RuntimeError):
 class LabelledMesh:
     name: str                      # "<part stem>/<variant>"
     part: str                      # STEP file name
-    variant: str                   # "cad", "scan", "sculpt" (or "scaling-<n>")
+    variant: str                   # one of VARIANTS (or "scaling-<n>")
     V: np.ndarray                  # float64 (N, 3)
     F: np.ndarray                  # int32 (M, 3)
     gt: np.ndarray                 # int32 (M,), B-rep face index of each triangle
     face_types: List[str]          # surface class name of every B-rep face ("Plane", "Cylinder", ...)
     diag: float                    # bounding-box diagonal of the part
     info: Dict = field(default_factory=dict)
-    unperturbed: Optional[np.ndarray] = None  # scan, sculpt: the positions before noise or undulation
+    unperturbed: Optional[np.ndarray] = None  # all but cad: the positions before noise or undulation
 
     @property
     def num_triangles(self) -> int:
@@ -176,6 +205,11 @@ def signed_volume(V: np.ndarray, F: np.ndarray) -> float:
 
 def stable_seed(*parts: str) -> int:
     return zlib.crc32(":".join(parts).encode("utf-8")) & 0xFFFFFFFF
+
+
+def variant_order(variant: str):
+    """Sort key: the order of VARIANTS, anything else (scaling-<n>) after it by name."""
+    return (VARIANTS.index(variant), "") if variant in VARIANTS else (len(VARIANTS), variant)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -365,6 +399,256 @@ class _Part:
         _save(path, {"V": V, "F": F, "gt": gt}, info)
         return V, F, gt, info
 
+    def marching_cubes(self, triangles: int = MC_TRIANGLES):
+        """The fine tessellation's signed distance on a grid of random phase, contoured by marching
+        cubes and labelled by closest fine triangle; (V, F, gt, info), cached."""
+        seed = stable_seed(self.path.name, "marching-cubes")  # one grid for mcscan and mcsculpt
+        params = {"file": self.digest, "linear": FINE_LINEAR_DEFLECTION, "angular": FINE_ANGULAR_DEFLECTION,
+                  "triangles": int(triangles), "per_cell": MC_TRIANGLES_PER_CELL, "pad": MC_PAD_CELLS,
+                  "tolerance": MC_COUNT_TOLERANCE, "lost": MC_LOST_VOLUME,
+                  "near": MC_NEAR_CELLS, "spacing": MC_SAMPLE_SPACING, "seed": seed}
+        path = _cache_path("mcubes", self.stem, params)
+        hit = _load(path)
+        if hit is not None:
+            a, info = hit
+            return a["V"], a["F"], a["gt"], info
+        start = time.perf_counter()
+        Vf, Ff, gtf, fine_info = self.tessellation(FINE_LINEAR_DEFLECTION, FINE_ANGULAR_DEFLECTION)
+        if not fine_info["watertight"]:
+            raise DatasetError("the fine tessellation is not watertight: no inside to contour")
+        area = float(triangle_areas(Vf, Ff).sum())
+        h = math.sqrt(MC_TRIANGLES_PER_CELL * area / triangles)
+        phase = np.random.default_rng(seed).uniform(0.0, 1.0, size=3)
+        volume = signed_volume(Vf, Ff)
+        counts = []
+        while True:
+            origin = Vf.min(axis=0) - (MC_PAD_CELLS + phase) * h
+            shape = tuple(int(n) for n in np.ceil((Vf.max(axis=0) + MC_PAD_CELLS * h - origin) / h).astype(int) + 1)
+            values, sdf_info = signed_distance_grid(Vf, Ff, origin, shape, h)
+            V, F, mc_info = marching_cubes_mesh(values, origin, h)
+            counts.append(int(len(F)))
+            area_ratio = float(triangle_areas(V, F).sum()) / area if len(F) else 0.0
+            volume_ratio = signed_volume(V, F) / volume if len(F) else 0.0
+            if abs(volume_ratio - 1.0) > MC_LOST_VOLUME:
+                raise DatasetError(
+                    f"marching cubes at h = {h:.4g} ({h / self.meta()['diag'] * 100:.2f} % of the diagonal) "
+                    f"loses the walls thinner than a cell: area {100 * area_ratio:.0f} %, volume "
+                    f"{100 * volume_ratio:.0f} % of the part's, {mc_info['components']} pieces")
+            if len(counts) == 2 or abs(len(F) - triangles) <= MC_COUNT_TOLERANCE * triangles:
+                break
+            h *= math.sqrt(len(F) / triangles)  # the count goes with 1 / h**2
+        nat = native()
+        centroids = np.ascontiguousarray(V[F].mean(axis=1))
+        nearest = np.asarray(nat.closest_faces(np.ascontiguousarray(Vf), np.ascontiguousarray(Ff, dtype=np.int32),
+                                               centroids), dtype=np.int64)
+        gt = gtf[nearest].astype(np.int32)
+        info = {"fine_triangles": int(len(Ff)), "fine_watertight": bool(fine_info["watertight"]),
+                "grid_spacing": h, "grid_shape": list(shape), "grid_phase": phase.tolist(), "grid_seed": seed,
+                "target_triangles": int(triangles), "triangles_per_cell": len(F) * h * h / area,
+                "passes": len(counts), "first_count": counts[0], "area_ratio": area_ratio,
+                "volume_ratio": volume_ratio}
+        info.update(sdf_info)
+        info.update(mc_info)
+        info.update(edge_statistics(F))
+        info["watertight"] = info["boundary_edges"] == 0 and info["nonmanifold_edges"] == 0
+        info["generation_seconds"] = time.perf_counter() - start
+        _save(path, {"V": V, "F": F, "gt": gt}, info)
+        return V, F, gt, info
+
+
+def surface_samples(V: np.ndarray, F: np.ndarray, spacing: float) -> np.ndarray:
+    """Points on the surface (V, F) about `spacing` apart, and at least one per cube of side `spacing`
+    that the surface crosses.
+
+    Triangles are bisected at their longest edge until that edge is at most 2 * spacing (pieces of
+    about spacing**2 each; their centroids are samples); a sliver, whose height is under `spacing`,
+    gives a row of points along its longest edge instead, lifted by a third of its height (a fan of
+    long slivers on a plane would otherwise be bisected into millions of pieces). Then one sample is
+    kept per cube of side `spacing`: fine triangles smaller than that add nothing."""
+    A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    keep = np.linalg.norm(np.cross(B - A, C - A), axis=1) > 0
+    A, B, C = A[keep], B[keep], C[keep]
+    points = []
+    while len(A):
+        squared = np.stack([((B - A) ** 2).sum(1), ((C - B) ** 2).sum(1), ((A - C) ** 2).sum(1)], axis=1)
+        # Rotate each triangle so that its longest edge is AB.
+        which = np.argmax(squared, axis=1)[:, None]
+        A, B, C = (np.where(which == 0, A, np.where(which == 1, B, C)),
+                   np.where(which == 0, B, np.where(which == 1, C, A)),
+                   np.where(which == 0, C, np.where(which == 1, A, B)))
+        longest = np.sqrt(squared.max(axis=1))
+        small = longest <= 2.0 * spacing
+        points.append((A[small] + B[small] + C[small]) / 3.0)
+        AB = B - A
+        t = np.einsum("ij,ij->i", C - A, AB) / np.maximum(longest ** 2, 1e-300)
+        lift = (C - A - t[:, None] * AB) / 3.0
+        sliver = ~small & (3.0 * np.linalg.norm(lift, axis=1) <= spacing)
+        if np.any(sliver):
+            rows = np.nonzero(sliver)[0]
+            count = np.ceil(longest[rows] / spacing).astype(np.int64)
+            owner = np.repeat(rows, count)
+            step = (np.arange(len(owner)) - np.repeat(np.cumsum(count) - count, count) + 0.5) / np.repeat(count, count)
+            points.append(A[owner] + step[:, None] * AB[owner] + lift[owner])
+        split = ~small & ~sliver
+        A, B, C = A[split], B[split], C[split]
+        M = 0.5 * (A + B)  # (A, M, C) and (M, B, C)
+        A, B, C = np.concatenate([A, M]), np.concatenate([M, B]), np.concatenate([C, C])
+    P = np.concatenate(points)
+    cube = np.floor((P - P.min(axis=0)) / spacing).astype(np.int64)
+    size = cube.max(axis=0) + 1
+    _, first = np.unique((cube[:, 0] * size[1] + cube[:, 1]) * size[2] + cube[:, 2], return_index=True)
+    return P[np.sort(first)]
+
+
+def closest_points_on_triangles(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray
+                                 ) -> Tuple[np.ndarray, np.ndarray]:
+    """The point of triangle (A[i], B[i], C[i]) closest to P[i], and where it lies: 0, 1, 2 the
+    corners A, B, C; 3, 4, 5 the edges AB, BC, CA; 6 inside (Ericson, Real-Time Collision
+    Detection, 5.1.5; vectorized, first matching region wins)."""
+    AB, AC = B - A, C - A
+    dot = lambda u, v: np.einsum("ij,ij->i", u, v)  # noqa: E731
+    AP, BP, CP = P - A, P - B, P - C
+    d1, d2, d3, d4, d5, d6 = dot(AB, AP), dot(AC, AP), dot(AB, BP), dot(AC, BP), dot(AB, CP), dot(AC, CP)
+    vc, vb, va = d1 * d4 - d3 * d2, d5 * d2 - d1 * d6, d3 * d6 - d5 * d4
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_ab = d1 / (d1 - d3)
+        t_ca = d2 / (d2 - d6)
+        t_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        total = va + vb + vc
+        v, w = vb / total, vc / total
+    conditions = [(d1 <= 0) & (d2 <= 0), (d3 >= 0) & (d4 <= d3), (vc <= 0) & (d1 >= 0) & (d3 <= 0),
+                  (d6 >= 0) & (d5 <= d6), (vb <= 0) & (d2 >= 0) & (d6 <= 0),
+                  (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0)]
+    region = np.select(conditions, [0, 1, 3, 2, 5, 4], default=6)
+    points = [A, B, C, A + t_ab[:, None] * AB, B + t_bc[:, None] * (C - B), A + t_ca[:, None] * AC,
+              A + v[:, None] * AB + w[:, None] * AC]
+    Q = np.empty_like(P)
+    for r in range(7):
+        mask = region == r
+        Q[mask] = points[r][mask]
+    return Q, region
+
+
+def pseudonormals(V: np.ndarray, F: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Angle-weighted pseudonormals (Baerentzen and Aanaes 2005) of a closed, consistently oriented
+    mesh: (face normals (m, 3), edge normals (m, 3, 3) for the edges v0v1, v1v2, v2v0 of each
+    triangle, vertex normals (n, 3)). The sign of (p - c) . N, with c the closest point of the
+    surface to p and N the pseudonormal of the face, edge or vertex c lies on, tells inside from
+    outside exactly; a face's normal alone fails near sharp edges. Edges with no opposite
+    half-edge (an open mesh) keep their face's normal."""
+    F = np.asarray(F, dtype=np.int64)
+    face = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    face /= np.maximum(np.linalg.norm(face, axis=1), 1e-300)[:, None]
+    vertex = np.zeros_like(V)
+    for k in range(3):
+        u = V[F[:, (k + 1) % 3]] - V[F[:, k]]
+        w = V[F[:, (k + 2) % 3]] - V[F[:, k]]
+        cosine = np.einsum("ij,ij->i", u, w) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1), 1e-300)
+        np.add.at(vertex, F[:, k], np.arccos(np.clip(cosine, -1.0, 1.0))[:, None] * face)
+    n = len(V)
+    heads, tails = F, np.roll(F, -1, axis=1)           # half-edge k of triangle t: F[t, k] -> F[t, k + 1]
+    keys = (heads * n + tails).reshape(-1)
+    order = np.argsort(keys)
+    opposite = (tails * n + heads).reshape(-1)
+    at = np.clip(np.searchsorted(keys[order], opposite), 0, len(keys) - 1)
+    found = keys[order][at] == opposite
+    other = np.where(found, order[at] // 3, np.repeat(np.arange(len(F)), 3))
+    edge = (face[:, None, :] + face[other].reshape(len(F), 3, 3))
+    return face, edge, vertex
+
+
+def signed_distance_grid(V: np.ndarray, F: np.ndarray, origin: np.ndarray, shape: Tuple[int, int, int],
+                         h: float) -> Tuple[np.ndarray, Dict]:
+    """Signed distance (negative inside) to the closed, outward-oriented surface (V, F) at the grid
+    points origin + h * (i, j, k), clamped to +-MC_NEAR_CELLS * h.
+
+    Near the surface (grid points within MC_NEAR_CELLS + 1 cells of a cell holding a surface
+    sample): the distance to the closest point c of the closest triangle (CGAL's AABB tree), signed
+    by the angle-weighted pseudonormal of the face, edge or corner c lies on. Exact: the grid's cells
+    cut the sharp edges, not the distance. (Cheaper signs fail near sharp edges: the nearest of dense
+    surface samples above a convex edge can be on the side face, and so can the closest triangle,
+    on a tie at the edge, whose plane then puts p inside; both left holes and blobs.) Farther,
+    only the sign matters and it comes from a flood fill: the far grid points' connected components
+    (6-neighbourhood) that touch the grid's border are outside; any other is inside unless the near
+    values around it say outside (an enclosed void).
+    """
+    from scipy import ndimage
+
+    P = surface_samples(V, F, MC_SAMPLE_SPACING * h)
+    clamp = MC_NEAR_CELLS * h
+    cells = np.clip(np.floor((P - origin) / h).astype(np.int64), 0, np.asarray(shape) - 1)
+    occupied = np.zeros(shape, dtype=bool)
+    occupied[cells[:, 0], cells[:, 1], cells[:, 2]] = True
+    near = ndimage.binary_dilation(occupied, structure=np.ones((3, 3, 3), bool),
+                                   iterations=int(math.ceil(MC_NEAR_CELLS)) + 1)
+    index = np.nonzero(near)
+    points = origin + h * np.stack(index, axis=1)
+    F = np.asarray(F, dtype=np.int64)
+    t = np.asarray(native().closest_faces(np.ascontiguousarray(V), np.ascontiguousarray(F, dtype=np.int32),
+                                          np.ascontiguousarray(points)), dtype=np.int64)
+    Q, region = closest_points_on_triangles(points, V[F[t, 0]], V[F[t, 1]], V[F[t, 2]])
+    face, edge, vertex = pseudonormals(V, F)
+    N = face[t]
+    corner = region < 3
+    N[corner] = vertex[F[t[corner], region[corner]]]
+    side = (region >= 3) & (region < 6)
+    N[side] = edge[t[side], region[side] - 3]
+    D = points - Q
+    sign = np.where(np.einsum("ij,ij->i", D, N) < 0, -1.0, 1.0)
+    values = np.zeros(shape)
+    values[index] = sign * np.minimum(np.linalg.norm(D, axis=1), clamp)
+
+    labels, count = ndimage.label(~near)  # 6-connected components of the far points
+    border = np.zeros(count + 1, dtype=bool)
+    for axis in range(3):
+        for end in (0, shape[axis] - 1):
+            border[np.unique(np.take(labels, end, axis=axis))] = True
+    # Votes of the near points next to each far component (the largest adjacent label only).
+    cross = ndimage.generate_binary_structure(3, 1)
+    adjacent = ndimage.maximum_filter(labels, footprint=cross, mode="constant", cval=0)
+    voters = near & (adjacent > 0)
+    votes = np.bincount(adjacent[voters], weights=np.sign(values[voters]), minlength=count + 1)
+    outside = border | (votes > 0)
+    outside[0] = False
+    values[~near] = np.where(outside, clamp, -clamp)[labels[~near]]
+    info = {"surface_samples": int(len(P)), "near_points": int(near.sum()), "far_components": int(count),
+            "voids": int(np.sum(outside[1:] & ~border[1:])),
+            "border_components_voting_inside": int(np.sum(border[1:] & (votes[1:] < 0)))}
+    return values, info
+
+
+def marching_cubes_mesh(values: np.ndarray, origin: np.ndarray, h: float) -> Tuple[np.ndarray, np.ndarray, Dict]:
+    """The zero level set of a grid (negative inside) by Lewiner marching cubes, oriented outwards:
+    duplicate vertices welded, collapsed and zero-area triangles dropped, edges counted."""
+    from skimage.measure import marching_cubes
+
+    verts, faces, _, _ = marching_cubes(values, level=0.0, spacing=(h, h, h), method="lewiner",
+                                        gradient_direction="descent", allow_degenerate=True)
+    V = np.asarray(verts, dtype=np.float64) + origin
+    F = np.asarray(faces, dtype=np.int64)
+    raw = len(F)
+    V, F, _, collapsed = weld(V, F, np.zeros(len(F), dtype=np.int32))
+    areas = triangle_areas(V, F)
+    flat = areas <= 1e-12 * h * h
+    F = F[~flat]
+    used = np.unique(F)
+    remap = np.full(len(V), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    V, F = V[used], remap[F]
+    flipped = signed_volume(V, F) < 0
+    if flipped:
+        F = F[:, ::-1]
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    edges = np.concatenate([F[:, [0, 1]], F[:, [1, 2]]])
+    components = connected_components(coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
+                                                 shape=(len(V), len(V))), directed=False)[0]
+    info = {"raw_triangles": int(raw), "components": int(components),
+            "dropped_triangles": int(collapsed + flat.sum()),
+            "collapsed_triangles": int(collapsed), "zero_area_triangles": int(flat.sum()),
+            "flipped": bool(flipped)}
+    return V, np.ascontiguousarray(F, dtype=np.int32), info
+
 
 def _scan_noise(V: np.ndarray, F: np.ndarray, diag: float, seed: int) -> np.ndarray:
     rng = np.random.default_rng(seed)
@@ -399,6 +683,13 @@ def make_variant(part: _Part, variant: str) -> LabelledMesh:
         info = dict(info)
         seed = stable_seed(part.path.name, variant)
         perturb = _scan_noise if variant == "scan" else _sculpt
+        V = perturb(unperturbed, F, diag, seed)
+        info["seed"] = seed
+    elif variant in ("mcscan", "mcsculpt"):
+        unperturbed, F, gt, info = part.marching_cubes(MC_TRIANGLES)
+        info = dict(info)
+        seed = stable_seed(part.path.name, variant)
+        perturb = _scan_noise if variant == "mcscan" else _sculpt
         V = perturb(unperturbed, F, diag, seed)
         info["seed"] = seed
     else:
@@ -498,8 +789,6 @@ def load_real_meshes(data: Path = DATA) -> List[Dict[str, str]]:
 
 
 if __name__ == "__main__":  # quick listing: python3 bench/datasets.py [name-filter ...]
-    import time
-
     start = time.perf_counter()
     for m in load_parts(only=sys.argv[1:] or None):
         counts = np.bincount(m.gt, minlength=len(m.face_types))

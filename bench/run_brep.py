@@ -1,9 +1,10 @@
 """B-rep benchmark: the fitted solid of every part against the STEP ground truth, for the cad /
-scan / sculpt variants, and FreeCAD's built-in mesh-to-solid route on the same meshes
-(bench/README.md, "B-rep benchmark").
+scan / sculpt variants (the marching-cubes ones with --variant), and FreeCAD's built-in
+mesh-to-solid route on the same meshes (bench/README.md, "B-rep benchmark").
 
     /usr/bin/python3 bench/run_brep.py              # full run, rewrites its BENCHMARKS.md section
     /usr/bin/python3 bench/run_brep.py --only box   # a subset (results/brep-partial.*)
+    /usr/bin/python3 bench/run_brep.py --variant mcscan --variant mcsculpt --no-builtin   # partial too
 """
 
 from __future__ import annotations
@@ -162,7 +163,7 @@ def _median(values: List[float]) -> Optional[float]:
 
 def summarize(rows: List[Dict]) -> Dict:
     summary = {}
-    for variant in datasets.VARIANTS:
+    for variant in sorted({r["variant"] for r in rows}, key=datasets.variant_order):
         vr = [r for r in rows if r["variant"] == variant]
         ok = [r for r in vr if r.get("ok")]
         solid = [r for r in ok if r["solid"]]
@@ -255,16 +256,17 @@ def _pct(x, digits=3) -> str:
 
 def markdown(results: Dict) -> str:
     s = results["summary"]
+    variants = list(s)
     lines = ["## B-rep benchmark", "",
              f"`{results['command']}` on {results['date']}, {results['machine'].get('cpu', '')}; "
              f"{results['total_seconds'] / 60:.1f} min. Ground truth: the STEP solid, faces on one surface "
              f"joined through shared edges; Hausdorff distance between tessellations of both solids "
              f"({SAMPLE_DEFLECTION * 100:g} % of the diagonal), vertices and triangle centroids sampled, "
              f"relative to the bounding-box diagonal.", "",
-             "| figure | " + " | ".join(datasets.VARIANTS) + " |", "|---|" + "---|" * len(datasets.VARIANTS)]
+             "| figure | " + " | ".join(variants) + " |", "|---|" + "---|" * len(variants)]
 
     def row(label, fn):
-        lines.append(f"| {label} | " + " | ".join(fn(s[v]) for v in datasets.VARIANTS) + " |")
+        lines.append(f"| {label} | " + " | ".join(fn(s[v]) for v in variants) + " |")
 
     row("valid closed solid", lambda x: f"{x['solid']}/{x['meshes']}")
     row("... with the ground truth's surface-type histogram", lambda x: f"{x['types_equal']}/{x['meshes']}")
@@ -289,12 +291,12 @@ def markdown(results: Dict) -> str:
     row("STEP size, median", lambda x: "–" if x["step_kb_median"] is None else f"{x['step_kb_median']:.1f} kB")
     row("STEP read back by FreeCAD: valid, as many solids, the same face count",
         lambda x: f"{x['step_reimport_same']}/{x['solid']} solids")
-    if any("builtin" in s[v] for v in datasets.VARIANTS):
+    if any("builtin" in s[v] for v in variants):
         lines += ["", f"FreeCAD's route (makeShapeFromMesh + Solid + removeSplitter) on the meshes of at most "
                       f"{BUILTIN_MAX_TRIANGLES} triangles, same run:", "",
                   "| variant | meshes | our speed-up (median) | STEP size ratio (median) | faces FreeCAD / ours (median) |",
                   "|---|---|---|---|---|"]
-        for v in datasets.VARIANTS:
+        for v in variants:
             b = s[v].get("builtin")
             if b:
                 lines.append(f"| {v} | {b['meshes']} | {b['speedup_median']:.1f}x | {b['step_ratio_median']:.1f}x | "
@@ -331,7 +333,8 @@ def markdown(results: Dict) -> str:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--only", action="append", metavar="NAME", help="only parts whose file name contains NAME")
-    parser.add_argument("--variant", action="append", choices=datasets.VARIANTS)
+    parser.add_argument("--variant", action="append", choices=datasets.VARIANTS,
+                        help="only this variant (repeatable; default: " + ", ".join(datasets.BASE_VARIANTS) + ")")
     parser.add_argument("--no-builtin", action="store_true", help="skip FreeCAD's built-in route")
     args = parser.parse_args(argv)
     partial = bool(args.only or args.variant)
@@ -344,7 +347,8 @@ def main(argv=None) -> int:
     gt_cache: Dict[str, Dict] = {}
     with tempfile.TemporaryDirectory(prefix="idealize-brep-") as tmp:
         workdir = Path(tmp)
-        for m in datasets.load_parts(args.variant or datasets.VARIANTS, only=args.only, log=lambda s: log("  " + s)):
+        for m in datasets.load_parts(args.variant or datasets.BASE_VARIANTS, only=args.only,
+                                     log=lambda s: log("  " + s)):
             if m.part not in gt_cache:
                 gt_cache[m.part] = ground_truth_solid(m.part)
             builtin = not args.no_builtin and m.num_triangles <= BUILTIN_MAX_TRIANGLES

@@ -1,8 +1,9 @@
 """Feature benchmark: identification, parameters, relations and idealization against the STEP
-ground truth, for the cad / scan / sculpt variants of every part (bench/README.md).
+ground truth, for every variant of every part (datasets.VARIANTS; bench/README.md).
 
     /usr/bin/python3 bench/run_features.py            # full run, rewrites its BENCHMARKS.md section
     /usr/bin/python3 bench/run_features.py --only box # a subset (results/features-partial.*)
+    /usr/bin/python3 bench/run_features.py --variant mcscan --variant mcsculpt   # some variants (partial too)
 """
 
 from __future__ import annotations
@@ -198,7 +199,7 @@ def bench_mesh(m, gt_info: Dict) -> Dict:
 
 def summarize(rows: List[Dict]) -> Dict:
     out = {}
-    for variant in sorted({r["variant"] for r in rows}):
+    for variant in sorted({r["variant"] for r in rows}, key=datasets.variant_order):
         rs = [r for r in rows if r["variant"] == variant and r.get("ok")]
         types = [t for r in rs for t in r["types"]]
         radius = [t["radius"] for t in types if "radius" in t]

@@ -4,15 +4,16 @@
     cd /work/main && /usr/bin/python3 bench/run_segmentation.py            # everything
     /usr/bin/python3 bench/run_segmentation.py --quick                     # smoke check (~1 min)
     /usr/bin/python3 bench/run_segmentation.py --only nist_ftc_06          # one part / mesh
+    /usr/bin/python3 bench/run_segmentation.py --variant mcscan --variant mcsculpt --skip-scaling --skip-real
 
-For every STEP part (bench/datasets.py) and every variant (cad, scan, sculpt) it segments the mesh
-with ``idealize.segment`` and with FreeCAD's ``Mesh.getSegmentsOfType`` (Plane, Cylinder, Sphere;
-first come first served), scores both against the B-rep faces (bench/scoring.py) and times both.
-It then times ``idealize.segment`` on 10k .. 1M triangles (each size in its own process, for its
+For every STEP part (bench/datasets.py) and every variant (cad, scan, sculpt, mcscan, mcsculpt) it
+segments the mesh with ``idealize.segment`` and with FreeCAD's ``Mesh.getSegmentsOfType`` (Plane,
+Cylinder, Sphere; first come first served), scores both against the B-rep faces (bench/scoring.py)
+and times both. It then times ``idealize.segment`` on 10k .. 1M triangles (each size in its own process, for its
 peak memory), segments the real meshes of the test data, and renders a picture of each result.
 
 A full run writes the "Segmentation benchmark" section of BENCHMARKS.md and
-bench/results/segmentation.json. Partial runs (--quick, --only, --skip-*) write
+bench/results/segmentation.json. Partial runs (--quick, --only, --variant, --skip-*) write
 bench/results/segmentation-partial.{json,md} instead, so they never overwrite the full results.
 Pictures go to bench/figures/ in both cases. See bench/README.md for what the numbers mean.
 """
@@ -384,7 +385,7 @@ def score_caption(label: str, run: Dict) -> str:
 
 
 def bench_parts(args):
-    variants = ("cad", "scan") if args.quick else datasets.VARIANTS
+    variants = args.variant or (("cad", "scan") if args.quick else datasets.VARIANTS)
     only = args.only or (list(QUICK_PARTS) if args.quick else None)
     log(f"== labelled parts ({', '.join(variants)})")
     start = time.perf_counter()
@@ -589,7 +590,7 @@ def _sum(rows: List[Dict], method: str) -> Dict:
 
 def summarize_parts(rows: List[Dict]) -> Dict:
     out = {}
-    for variant in sorted({r["variant"] for r in rows}, key=lambda v: list(datasets.VARIANTS).index(v)):
+    for variant in sorted({r["variant"] for r in rows}, key=datasets.variant_order):
         vr = [r for r in rows if r["variant"] == variant]
         entry = {"meshes": len(vr), "triangles": int(sum(r["triangles"] for r in vr))}
         for method in ("idealize", "freecad", "freecad_loose"):
@@ -630,7 +631,11 @@ def markdown(results: Dict) -> str:
     add(f"Meshes: every STEP part in the test data as `cad` (the CAD tessellation), `scan` (isotropic "
         f"remesh to ~{p['scan_triangles'] // 1000}k triangles, chamfered edges, Gaussian noise σ = "
         f"{p['scan_noise_sigma'] * 100:g} % of the diagonal along the normals) and `sculpt` (same remesh, smooth "
-        f"undulations of {p['sculpt_amplitude'] * 100:g} % of the diagonal). A B-rep face is *correct* when one "
+        f"undulations of {p['sculpt_amplitude'] * 100:g} % of the diagonal)"
+        + ("; `mcscan` and `mcsculpt` (the same noise and undulations on a marching-cubes surface of the part's "
+           f"signed distance, ~{p.get('mc_triangles', 46000) // 1000}k triangles)"
+           if any(r["variant"].startswith("mc") for r in results.get("parts", [])) else "")
+        + ". A B-rep face is *correct* when one "
         "patch holds ≥ 80 % of its area and ≥ 80 % of that patch lies in it; *over* = split (no patch holds "
         "80 %), *under* = merged (its best patch is mostly elsewhere). Faces under 0.05 % of the area are not "
         f"scored. FreeCAD: `Mesh.getSegmentsOfType` for {', '.join(FREECAD_TYPES)} with tolerance "
@@ -793,6 +798,8 @@ def main(argv=None) -> int:
                         help=f"smoke check: {len(QUICK_PARTS)} parts, cad+scan only, no scaling")
     parser.add_argument("--only", action="append", metavar="NAME",
                         help="only parts / real meshes whose file name contains NAME (repeatable)")
+    parser.add_argument("--variant", action="append", choices=datasets.VARIANTS,
+                        help="only this variant of the parts (repeatable; default: all)")
     parser.add_argument("--figures", choices=("all", "scan", "none"), default="all",
                         help="pictures of every part variant (default), of scan variants only, or none")
     parser.add_argument("--skip-scaling", action="store_true")
@@ -825,7 +832,7 @@ def main(argv=None) -> int:
 
     global RERUN_FREECAD
     RERUN_FREECAD = args.rerun_freecad
-    partial = bool(args.quick or args.only or args.skip_scaling or args.skip_real or args.skip_parts)
+    partial = bool(args.quick or args.only or args.variant or args.skip_scaling or args.skip_real or args.skip_parts)
     if args.quick:
         args.skip_scaling = True
         args.freecad_loose = False
@@ -836,6 +843,7 @@ def main(argv=None) -> int:
         "machine": machine_info(),
         "parameters": {
             "scan_triangles": datasets.SCAN_TRIANGLES, "remesh_iterations": datasets.REMESH_ITERATIONS,
+            "mc_triangles": datasets.MC_TRIANGLES,
             "scan_noise_sigma": datasets.SCAN_NOISE_SIGMA, "sculpt_amplitude": datasets.SCULPT_AMPLITUDE,
             "cad_linear_deflection": datasets.CAD_LINEAR_DEFLECTION,
             "cad_angular_deflection": datasets.CAD_ANGULAR_DEFLECTION,

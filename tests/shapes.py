@@ -283,7 +283,7 @@ def bench_module(module):
 
 
 def benchmark_mesh(name, variant):
-    """The benchmark's `variant` ("cad", "scan" or "sculpt") of the STEP part `name`, made (and
+    """The benchmark's `variant` (one of datasets.VARIANTS) of the STEP part `name`, made (and
     cached) by bench/datasets.py: a mesh with V, F, gt (B-rep face per triangle) and face_types."""
     return bench_module("datasets").load_part(SHARED_STEP / name, [variant], log=lambda *_: None)[0]
 

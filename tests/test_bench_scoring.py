@@ -154,3 +154,70 @@ def test_sampled_radius_follows_the_displacement_outwards():
     torus = {"type": "torus", "params": {"axis": [0, 0, 1], "center": [0, 0, 0], "major": 5.0, "minor": 1.0}}
     assert run_features.sampled_radius(torus, tube, normals, np.full(len(tube), 0.1),
                                        np.arange(len(tube))) == pytest.approx(1.1)
+
+
+def _convex_solid(points):
+    """Outward-oriented triangles of the convex hull of `points` and the hull's plane equations."""
+    from scipy.spatial import ConvexHull
+    hull = ConvexHull(points)
+    F = hull.simplices.copy()
+    V = hull.points
+    normals = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    inward = np.einsum("ij,ij->i", normals, V[F].mean(axis=1) - V.mean(axis=0)) < 0
+    F[inward] = F[inward][:, ::-1]
+    return V, F, hull.equations
+
+
+def test_marching_cubes_signed_distance_is_exact_at_an_acute_edge():
+    """The signed distance the marching-cubes variants contour: exact within the clamp, and signed
+    right around a 20-degree wedge, where the closest triangle's plane alone puts points above the
+    edge inside (bench/datasets.py, signed_distance_grid)."""
+    import shapes
+    datasets = shapes.bench_module("datasets")
+    a = np.radians(20.0)
+    profile = [(0.0, 0.0), (10.0, 0.0), (10.0 * np.cos(a), 10.0 * np.sin(a))]
+    V, F, planes = _convex_solid(np.array([(x, y, z) for x, y in profile for z in (0.0, 5.0)]))
+    h = 0.37
+    origin = V.min(axis=0) - (2 + np.array([0.3, 0.7, 0.1])) * h
+    shape = tuple(int(n) for n in np.ceil((V.max(axis=0) + 2 * h - origin) / h).astype(int) + 1)
+    values, info = datasets.signed_distance_grid(V, F, origin, shape, h)
+    P = origin + h * np.stack(np.nonzero(np.ones(shape, bool)), axis=1)
+    inside = np.all(P @ planes[:, :3].T + planes[:, 3] < 0, axis=1)
+    distance = np.full(len(P), np.inf)
+    for t in F:
+        Q, _ = datasets.closest_points_on_triangles(P, *(np.repeat(V[[c]], len(P), axis=0) for c in t))
+        distance = np.minimum(distance, np.linalg.norm(P - Q, axis=1))
+    expected = np.where(inside, -1.0, 1.0) * np.minimum(distance, datasets.MC_NEAR_CELLS * h)
+    assert np.all(np.sign(values.reshape(-1)) == np.where(inside, -1.0, 1.0))
+    assert np.allclose(values.reshape(-1), expected, atol=1e-9)
+    assert info["voids"] == 0
+
+    Vm, Fm, mc = datasets.marching_cubes_mesh(values, origin, h)
+    stats = datasets.edge_statistics(Fm)
+    assert stats["boundary_edges"] == stats["nonmanifold_edges"] == stats["misoriented_edges"] == 0
+    assert mc["components"] == 1 and not mc["flipped"]
+    volume = 0.5 * 10.0 * 10.0 * np.sin(a) * 5.0
+    assert datasets.signed_volume(Vm, Fm) == pytest.approx(volume, rel=0.05)
+
+
+def test_surface_samples_cover_slivers_and_large_triangles():
+    """Every point of the surface lies within about one spacing of a sample, for a fan of long
+    slivers and for a triangle much larger than the spacing alike, with no more samples than the
+    area needs."""
+    import shapes
+    from scipy.spatial import cKDTree
+    datasets = shapes.bench_module("datasets")
+    V = np.array([[0.0, 0.0, 0.0]] + [[10.0, y, 0.0] for y in np.linspace(0.0, 0.5, 11)]
+                 + [[0.0, 0.0, 1.0], [10.0, 0.0, 1.0], [0.0, 10.0, 1.0]])
+    F = np.array([[0, i, i + 1] for i in range(1, 11)] + [[12, 13, 14]])
+    spacing = 0.2
+    P = datasets.surface_samples(V, F, spacing)
+    rng = np.random.default_rng(1)
+    r = rng.random((20000, 2))
+    r[r.sum(1) > 1] = 1 - r[r.sum(1) > 1]
+    t = rng.integers(0, len(F), 20000)
+    A, B, C = V[F[t, 0]], V[F[t, 1]], V[F[t, 2]]
+    probes = A + r[:, :1] * (B - A) + r[:, 1:] * (C - A)
+    assert cKDTree(P).query(probes)[0].max() < 1.5 * spacing
+    area = datasets.triangle_areas(V, F).sum()
+    assert len(P) < 3 * area / spacing ** 2

@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 ROOT=$(pwd)
 
 PACKAGES=(freecad cmake g++ make pybind11-dev python3-pybind11 python3-dev python3-numpy python3-scipy
-          python3-matplotlib python3-pytest libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev
+          python3-skimage python3-matplotlib python3-pytest libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev
           libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
           libocct-data-exchange-dev libocct-ocaf-dev xvfb xauth clang libclang-rt-14-dev)
 
