@@ -197,6 +197,55 @@ def check_panel(doc, layer):
     return fit, zoom
 
 
+def check_recompute():
+    """A recompute from an option change (as the property editor makes it: one transaction), behind
+    the progress dialog: Cancel stops it within a second and the layer keeps its result; one that
+    runs to the end is one undo step. On a denser copy of the part (64 times the triangles), in a
+    document of its own: the dialog shows after half a second, and the part itself converts faster."""
+    import Mesh
+    doc = App.newDocument("Dense")
+    Mesh.insert(CONFIG["dense_mesh"], doc.Name)
+    layer = run_on(doc, doc.Objects[-1], "Idealize_SegmentIdealize")[0]
+    kept = {"labels": list(layer.Labels), "table": layer.FeatureTable, "fingerprint": layer.SourceFingerprint}
+    seen = {"start": time.perf_counter()}
+    watch_progress("Recompute", seen, cancel=True)
+    report_before = len(report_view_text())
+    doc.openTransaction("Change AngleTolerance")
+    layer.AngleTolerance = 4.0
+    doc.recompute()
+    seen["returned_after_cancel"] = round(time.perf_counter() - seen.pop("pressed", float("nan")), 2)
+    seen["stop"] = True
+    doc.commitTransaction()
+    Gui.updateGui()
+    seen.update(kept=all(getattr(layer, k) == v for k, v in (("FeatureTable", kept["table"]),
+                                                             ("SourceFingerprint", kept["fingerprint"])))
+                and list(layer.Labels) == kept["labels"],
+                state=list(layer.State), status=Gui.getMainWindow().statusBar().currentMessage(),
+                report=report_view_text()[report_before:])
+    seen.pop("start")
+    doc.undo()  # the option change
+    doc.recompute()
+    seen["after_undo"] = {"angle": float(layer.AngleTolerance), "state": list(layer.State)}
+    cancelled = seen
+
+    # ... and one that runs to the end: new results, one undo step that brings the old ones back.
+    seen = {"start": time.perf_counter()}
+    watch_progress("Recompute", seen, cancel=False)
+    undo_count = len(doc.UndoNames)
+    doc.openTransaction("Change IdealizeRelations")
+    layer.IdealizeRelations = False
+    doc.recompute()
+    seen["stop"] = True
+    doc.commitTransaction()
+    seen.pop("start")
+    seen.update(state=list(layer.State), changed=layer.SourceFingerprint != kept["fingerprint"],
+                undo_added=len(doc.UndoNames) - undo_count)
+    doc.undo()
+    seen["undone"] = layer.SourceFingerprint == kept["fingerprint"] and layer.IdealizeRelations is True
+    App.closeDocument(doc.Name)
+    return cancelled, seen
+
+
 def run():
     if not start_session():
         return
@@ -237,45 +286,7 @@ def run():
 
     result["panel_fit"], result["zoom"] = check_panel(doc, layer)
 
-    # A recompute from an option change (as the property editor makes it: one transaction):
-    # behind the progress dialog; Cancel stops it within a second and the layer keeps its result.
-    kept = {"labels": list(layer.Labels), "table": layer.FeatureTable, "fingerprint": layer.SourceFingerprint}
-    seen = {"start": time.perf_counter()}
-    watch_progress("Recompute", seen, cancel=True)
-    report_before = len(report_view_text())
-    doc.openTransaction("Change AngleTolerance")
-    layer.AngleTolerance = 4.0
-    doc.recompute()
-    seen["returned_after_cancel"] = round(time.perf_counter() - seen.pop("pressed", float("nan")), 2)
-    seen["stop"] = True
-    doc.commitTransaction()
-    Gui.updateGui()
-    seen.update(kept=all(getattr(layer, k) == v for k, v in (("FeatureTable", kept["table"]),
-                                                             ("SourceFingerprint", kept["fingerprint"])))
-                and list(layer.Labels) == kept["labels"],
-                state=list(layer.State), status=Gui.getMainWindow().statusBar().currentMessage(),
-                report=report_view_text()[report_before:])
-    seen.pop("start")
-    doc.undo()  # the option change
-    doc.recompute()
-    seen["after_undo"] = {"angle": float(layer.AngleTolerance), "state": list(layer.State)}
-    result["recompute_cancelled"] = seen
-
-    # ... and one that runs to the end: new results, one undo step that brings the old ones back.
-    seen = {"start": time.perf_counter()}
-    watch_progress("Recompute", seen, cancel=False)
-    undo_count = len(doc.UndoNames)
-    doc.openTransaction("Change IdealizeRelations")
-    layer.IdealizeRelations = False
-    doc.recompute()
-    seen["stop"] = True
-    doc.commitTransaction()
-    seen.pop("start")
-    seen.update(state=list(layer.State), changed=layer.SourceFingerprint != kept["fingerprint"],
-                undo_added=len(doc.UndoNames) - undo_count)
-    doc.undo()
-    seen["undone"] = layer.SourceFingerprint == kept["fingerprint"] and layer.IdealizeRelations is True
-    result["recompute_done"] = seen
+    result["recompute_cancelled"], result["recompute_done"] = check_recompute()
 
     # Save, close and reopen.
     names = {"layer": layer.Name, "segmented": segmented.Name}
@@ -297,13 +308,38 @@ def run():
 '''
 
 
+def subdivided(path, times):
+    """The mesh in `path` with every triangle split in four at its edges' midpoints, `times` times:
+    (V, F)."""
+    import numpy as np
+    import idealize
+    mesh = idealize.load_mesh(path)
+    V, F = np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)
+    for _ in range(times):
+        edges = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+        unique, inverse = np.unique(edges, axis=0, return_inverse=True)
+        ab, bc, ca = len(V) + inverse.reshape(3, -1)
+        V = np.vstack([V, V[unique].mean(axis=1)])
+        a, b, c = F.T
+        F = np.concatenate([np.stack(t, axis=1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+    return V, F
+
+
+def write_obj(path, V, F):
+    import numpy as np
+    with open(path, "w") as out:
+        np.savetxt(out, V, fmt="v %.17g %.17g %.17g")
+        np.savetxt(out, F + 1, fmt="f %d %d %d")
+
+
 @pytest.fixture(scope="module")
 def new_user(tmp_path_factory):
     """One run of what a new user does in FreeCAD's window; the tests below each check a part of
     what it saw, so that one failure does not hide the rest."""
     tmp_path = tmp_path_factory.mktemp("workbench")
     assert os.path.exists(MESH), "the shared test data must sit beside the repository: %s" % MESH
-    config = {"mesh": MESH, "fcstd": str(tmp_path / "reopen.FCStd")}
+    config = {"mesh": MESH, "fcstd": str(tmp_path / "reopen.FCStd"), "dense_mesh": str(tmp_path / "dense.obj")}
+    write_obj(config["dense_mesh"], *subdivided(MESH, 3))
     for key in ("preferences", "deviation", "panel", "reopened", "reopened_segmented"):
         config["screenshot_" + key] = str(tmp_path / ("%s.png" % key))
     result = gui.run_gui(DRIVER, config, tmp_path)
@@ -332,7 +368,8 @@ def test_commands_leave_the_view_clear_and_the_legend_explains(new_user):
     labels = result["labels"]
     # Nothing selected after a command; Segment & Idealize hid the source and the earlier copy.
     runs = result["selected_after"]
-    assert runs["Idealize_Segment"] == [[1, []]] and runs["Idealize_SegmentIdealize"] == [[1, []]], runs
+    # (Segment & Idealize runs twice: on the part, and on its denser copy for the recompute checks.)
+    assert runs["Idealize_Segment"] == [[1, []]] and runs["Idealize_SegmentIdealize"] == [[1, []]] * 2, runs
     assert result["visible_after_idealize"] == [labels["layer"]]
     deviation = result["deviation"]
     assert deviation["visible"] == [labels["layer"]] and deviation["selected"] == []
