@@ -678,18 +678,13 @@ def make_variant(part: _Part, variant: str) -> LabelledMesh:
     if variant == "cad":
         V, F, gt, info = part.tessellation(CAD_LINEAR_DEFLECTION, CAD_ANGULAR_DEFLECTION)
         unperturbed = None
-    elif variant in ("scan", "sculpt"):
-        unperturbed, F, gt, info = part.remeshed(SCAN_TRIANGLES)
+    elif variant in ("scan", "sculpt", "mcscan", "mcsculpt"):
+        # The surface (a remesh, or marching cubes for the mc variants), then noise or undulation.
+        make = part.marching_cubes if variant.startswith("mc") else part.remeshed
+        unperturbed, F, gt, info = make(MC_TRIANGLES if variant.startswith("mc") else SCAN_TRIANGLES)
         info = dict(info)
         seed = stable_seed(part.path.name, variant)
-        perturb = _scan_noise if variant == "scan" else _sculpt
-        V = perturb(unperturbed, F, diag, seed)
-        info["seed"] = seed
-    elif variant in ("mcscan", "mcsculpt"):
-        unperturbed, F, gt, info = part.marching_cubes(MC_TRIANGLES)
-        info = dict(info)
-        seed = stable_seed(part.path.name, variant)
-        perturb = _scan_noise if variant == "mcscan" else _sculpt
+        perturb = _scan_noise if variant.endswith("scan") else _sculpt
         V = perturb(unperturbed, F, diag, seed)
         info["seed"] = seed
     else:
