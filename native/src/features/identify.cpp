@@ -32,24 +32,38 @@ Feature identify(const PatchPoints& pp, const PatchCurvature& curvature, const E
   feature.vertices = static_cast<int>(pp.points.rows());
   feature.curvature_type = curvature_type(curvature, zero_h);
   feature.curvature = curvature;
+  const size_t first = curved_only ? 1 : 0;
+  const double normal_floor = options.normal_floor_degrees * M_PI / 180.0;
   std::array<SurfaceFit, 5> fits;
   double best = std::numeric_limits<double>::infinity(), best_normal = best;
-  for (size_t t = curved_only ? 1 : 0; t < kTypesByPreference.size(); ++t) {
-    fits[t] = fit_surface(kTypesByPreference[t], pp, options.fit);
-    if (fits[t].valid) {
-      best = std::min(best, fits[t].spread);
-      best_normal = std::min(best_normal, fits[t].normal_spread);
+  // The first type accepted against the best fits so far. Later fits only lower the best, and so
+  // the limits: a type that fails now fails for good, and one within the limits' floors (the
+  // distance tolerance, the normal floor) is accepted for good. When the first type accepted so
+  // far is of that kind, the more general types need not be fitted at all.
+  auto first_accepted = [&](size_t fitted) {
+    // Surfaces that deviate by less than the distance tolerance are as good as equal.
+    const double accepted = accepted_residual(best, options.residual_ratio, tolerance);
+    const double accepted_normal = accepted_residual(best_normal, options.residual_ratio, normal_floor);
+    for (size_t t = first; t < fitted; ++t)
+      if (fits[t].valid && fits[t].spread <= accepted && fits[t].normal_spread <= accepted_normal)
+        return static_cast<int>(t);
+    return -1;
+  };
+  size_t fitted = first;
+  for (; fitted < kTypesByPreference.size(); ++fitted) {
+    SurfaceFit& fit = fits[fitted];
+    fit = fit_surface(kTypesByPreference[fitted], pp, options.fit);
+    if (!fit.valid) continue;
+    best = std::min(best, fit.spread);
+    best_normal = std::min(best_normal, fit.normal_spread);
+    const int leading = first_accepted(fitted + 1);
+    if (leading >= 0 && fits[leading].spread <= tolerance && fits[leading].normal_spread <= normal_floor) {
+      ++fitted;
+      break;
     }
   }
-  // Surfaces that deviate by less than the distance tolerance are as good as equal.
-  const double accepted = accepted_residual(best, options.residual_ratio, tolerance);
-  const double accepted_normal =
-      accepted_residual(best_normal, options.residual_ratio, options.normal_floor_degrees * M_PI / 180.0);
   // The first accepted type: a more general surface always fits a little better.
-  int chosen = -1;
-  for (size_t t = curved_only ? 1 : 0; t < fits.size() && chosen < 0; ++t)
-    if (fits[t].valid && fits[t].spread <= accepted && fits[t].normal_spread <= accepted_normal)
-      chosen = static_cast<int>(t);
+  const int chosen = first_accepted(fitted);
   if (chosen < 0) return feature;  // no surface could be fitted at all
   feature.set_fit(fits[chosen]);
   return feature;

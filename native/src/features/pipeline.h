@@ -57,7 +57,7 @@ struct FeatureState {
   // The mesh's kind and noise, decided by the split stage from the typical patch's fit: an exact
   // tessellation (its vertices on their faces, as a CAD export's) or a measured surface.
   bool exact_mesh = false;
-  bool noiseless = false;     // the typical patch fits to a hundredth of the tolerance (exact or not)
+  bool noiseless = false;     // the best-fitting tenth of the patches fits to a hundredth of the tolerance (exact or not)
   double noise = 0.0;         // the typical patch's spread (distance)
   double normal_noise = 0.0;  // and its normals' (radians)
   // The RMS distance above which a surface does not fit its patch (decided with the noise; none before).

@@ -543,32 +543,65 @@ bool uniformly_sampled(const TriangleMesh& mesh) {
   return length[high] < 2.0 * p10;
 }
 
-// The mesh's kind and noise from the typical patch's fit (the lower median: of two patches, the one
-// that fits shows the noise). An exact tessellation is a CAD export: its triangles lie on their
-// faces, so that the typical patch fits to a hundredth of the tolerance, with its rim unless the
-// segmentation joined faces of the coarse, uneven tessellation. A remeshed surface whose vertices
-// were projected onto the part fits as closely inside its patches, but its uniform triangles
-// straddle the part's edges, and the typical patch's rim leaves its surface by a good part of an
-// edge length: it is a measured surface without noise. Returns false when no patch has a surface
-// (nothing to measure).
+// The value below which `share` of the weight lies: (value, weight) pairs, sorted here.
+double weighted_quantile(std::vector<std::pair<double, double>> values, double share) {
+  std::sort(values.begin(), values.end());
+  double total = 0.0;
+  for (const auto& v : values) total += v.second;
+  double below = 0.0;
+  for (const auto& [value, weight] : values)
+    if ((below += weight) >= share * total) return value;
+  return values.empty() ? 0.0 : values.back().first;
+}
+
+// The mesh's kind and noise from its patches' fits, each weighed by its evidence: its points beyond
+// the surface's parameters (a patch of as many points as parameters fits any noise exactly).
+//
+// A mesh is noiseless when the best-fitting tenth of the evidence fits to a hundredth of the
+// tolerance. On a noisy or sculpted mesh no patch of many points fits that closely; on a CAD
+// export, or a remesh whose vertices were projected onto the part, the patches that cover one face
+// do, however many others the segmentation joined across edges. Measured on the test data's 61
+// parts and 9 real meshes, the share of the evidence in such patches is 0 on every scan-like mesh
+// and at most 0.07 on the sculpted ones (whose bumps leave some faces untouched), against 0.14 to
+// 1 on the noiseless ones: a tenth lies between the two.
+//
+// An exact tessellation is a CAD export: its triangles lie on their faces, so that its patches fit
+// to a hundredth of the tolerance with their rims too, unless the segmentation joined faces of the
+// coarse, uneven tessellation. A remeshed surface whose vertices were projected onto the part fits
+// as closely inside its patches, but its uniform triangles straddle the part's edges, and the
+// typical patch's rim leaves its surface by a good part of an edge length: it is a measured surface
+// without noise. Returns false when no patch has a surface (nothing to measure).
 bool decide_mesh_kind(FeatureState& s) {
-  std::vector<double> rms, normal_rms, farthest;
-  const std::vector<double> farthest_vertex = farthest_vertices(s);
+  constexpr double kBestShare = 0.1;  // see above: between 0.07 (sculpted) and 0.14 (noiseless)
+  std::vector<std::pair<double, double>> rms, normal_rms;
   for (size_t p = 0; p < s.layer.features.size(); ++p)
     if (const Feature& f = s.layer.features[p]; f.type != SurfaceType::Freeform) {
-      rms.push_back(f.spread);
-      normal_rms.push_back(f.normal_spread);
-      farthest.push_back(farthest_vertex[p]);
+      const double evidence = std::max(0.0, static_cast<double>(s.points[p].points.rows()) - parameter_count(f.type));
+      rms.push_back({f.spread, evidence});
+      normal_rms.push_back({f.normal_spread, evidence});
     }
   if (rms.empty()) return false;
-  const size_t middle = (rms.size() - 1) / 2;
-  std::nth_element(rms.begin(), rms.begin() + middle, rms.end());
-  std::nth_element(normal_rms.begin(), normal_rms.begin() + middle, normal_rms.end());
-  std::nth_element(farthest.begin(), farthest.begin() + middle, farthest.end());
-  s.noiseless = rms[middle] < kExactFraction * s.layer.distance_tolerance;
-  s.exact_mesh = s.noiseless && (farthest[middle] < s.exact_distance || !uniformly_sampled(s.mesh));
-  s.noise = rms[middle] + s.floor;
-  s.normal_noise += normal_rms[middle];
+  const double best_rms = weighted_quantile(rms, kBestShare);
+  s.noiseless = best_rms < kExactFraction * s.layer.distance_tolerance;
+  // The noise of a noiseless mesh is what the patches that fit show; that of a noisy one what the
+  // typical patch shows (the lower median: of two patches, the one that fits shows the noise).
+  auto typical = [&](std::vector<std::pair<double, double>>& values) {
+    if (s.noiseless) return weighted_quantile(values, kBestShare);
+    const auto middle = values.begin() + (values.size() - 1) / 2;
+    std::nth_element(values.begin(), middle, values.end());
+    return middle->first;
+  };
+  s.noise = typical(rms) + s.floor;
+  s.normal_noise += typical(normal_rms);
+  if (s.noiseless) {
+    std::vector<double> farthest;
+    const std::vector<double> farthest_vertex = farthest_vertices(s);
+    for (size_t p = 0; p < s.layer.features.size(); ++p)
+      if (s.layer.features[p].type != SurfaceType::Freeform) farthest.push_back(farthest_vertex[p]);
+    const size_t middle = (farthest.size() - 1) / 2;
+    std::nth_element(farthest.begin(), farthest.begin() + middle, farthest.end());
+    s.exact_mesh = farthest[middle] < s.exact_distance || !uniformly_sampled(s.mesh);
+  }
   return true;
 }
 
