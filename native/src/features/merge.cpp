@@ -271,7 +271,7 @@ Judgement PairJudge::judge(int a, int b, const std::set<std::pair<int, int>>& re
 // Applies the verdicts: absorbed pieces first, into the largest patches first (a patch that
 // absorbs keeps its surface for this call, refitted to all it took), then the merges, cheapest
 // first, each patch in one at most. Returns whether any patch changed.
-bool apply_verdicts(const std::vector<PatchPoints>& points, const FeatureOptions& options, double exact_distance,
+bool apply_verdicts(const std::vector<PatchPoints>& points, const FeatureOptions& options, bool exact, double exact_distance,
                     std::vector<std::pair<int, int>>& absorbed, std::vector<Candidate>& candidates,
                     std::vector<Feature>& features, std::vector<int>& labels, std::set<std::pair<int, int>>& rejected) {
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
@@ -317,8 +317,16 @@ bool apply_verdicts(const std::vector<PatchPoints>& points, const FeatureOptions
   for (size_t p = 0; p < absorbing.size(); ++p) merged[p] |= absorbing[p];
   for (int& l : labels)
     if (l >= 0) l = into[l];
-  for (auto it = rejected.begin(); it != rejected.end();)  // pairs with a grown patch are open again
-    it = merged[it->first] || merged[it->second] ? rejected.erase(it) : std::next(it);
+  // Pairs with a grown patch are open again, but on an exact tessellation not those of a patch that
+  // had the points to fix its surface: a surface that explains the grown patch and a neighbour
+  // exactly explains the patch as it was and that neighbour, which no surface did. (Reopening them
+  // re-judged every neighbour of a surface that takes its fragments one per call.)
+  std::vector<char> reopen(merged);
+  if (exact)
+    for (size_t p = 0; p < reopen.size(); ++p)
+      if (into[p] == static_cast<int>(p) && points[p].points.rows() >= kInteriorPoints) reopen[p] = 0;
+  for (auto it = rejected.begin(); it != rejected.end();)
+    it = reopen[it->first] || reopen[it->second] ? rejected.erase(it) : std::next(it);
   return any;
 }
 
@@ -356,7 +364,7 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
     if (j.verdict == Verdict::kMerged) candidates.push_back(std::move(j.candidate));
     if (j.verdict == Verdict::kRejected) rejected.insert({j.candidate.a, j.candidate.b});
   }
-  return apply_verdicts(points, options, exact_distance, absorbed, candidates, features, labels, rejected);
+  return apply_verdicts(points, options, exact, exact_distance, absorbed, candidates, features, labels, rejected);
 }
 
 // Merges patches that one surface fits together, pass by pass until none merges. On an exact

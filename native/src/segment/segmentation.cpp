@@ -365,7 +365,11 @@ Segmentation segment_mesh(const TriangleMesh& input, const SegmentationOptions& 
 
   {
     TriangleMesh denoised;
-    denoised.V = denoised_positions(mesh, topology, options.denoising, progress.sub("denoise", 0.18, 0.88));
+    // A vertex whose curvature radius is below k edge lengths lies on a fold of more than about 1/k
+    // radians: pass 1 calls it sharp, and denoising must not take it for noise.
+    DenoisingOptions denoising = options.denoising;
+    if (denoising.edge_fold <= 0.0) denoising.edge_fold = 1.0 / options.sharp_radius_in_edges;
+    denoised.V = denoised_positions(mesh, topology, denoising, progress.sub("denoise", 0.18, 0.88));
     denoised.F = mesh.F;
     VertexCurvature curvature = vertex_curvature(denoised, topology, progress.sub("curvature", 0.88, 0.93));
     out.mean_curvature = std::move(curvature.mean);
