@@ -125,6 +125,40 @@ bool join_freeform_features(const TriangleMesh& mesh, const MeshTopology& topolo
   return any;
 }
 
+// On an exact tessellation, the single facets that merging left as pieces of their own (planes
+// that no neighbour's surface explains), where they meet each other without a crease (a turn below
+// the largest a face's own facets make), are facets of one surface that no analytic type explains:
+// a B-spline face of the export. Each connected group of them becomes one freeform feature.
+// (Pieces of two facets are not taken: a quad whose four corners are coplanar is a plane, and the
+// CAD exports of the test data have large two-facet planes that meet at shallow angles.) Returns
+// whether any group formed.
+bool join_unplaced_facets(const TriangleMesh& mesh, const MeshTopology& topology, std::vector<int>& labels,
+                          std::vector<Feature>& features) {
+  const auto piece = [&](int p) { return features[p].type == SurfaceType::Plane && features[p].triangles == 1; };
+  std::vector<int> parent(features.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  const std::function<int(int)> root = [&](int p) { return parent[p] == p ? p : parent[p] = root(parent[p]); };
+  bool any = false;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int g = topology.face_neighbor(f, c);
+      if (g < f || labels[f] < 0 || labels[g] < 0 || labels[f] == labels[g]) continue;
+      if (!piece(labels[f]) || !piece(labels[g]) || facet_turn(mesh, f, g) >= kLargestFacetTurn) continue;
+      const int ra = root(labels[f]), rb = root(labels[g]);
+      if (ra != rb) {
+        parent[std::max(ra, rb)] = std::min(ra, rb);
+        any = true;
+      }
+    }
+  if (!any) return false;
+  for (size_t p = 0; p < features.size(); ++p)
+    if (root(static_cast<int>(p)) != static_cast<int>(p)) features[root(static_cast<int>(p))].type = SurfaceType::Freeform;
+  for (int& l : labels)
+    if (l >= 0) l = root(l);
+  compact_features(labels, features);
+  return true;
+}
+
 // Settles the patches after merging: splits of an exact tessellation that found nothing exact are
 // undone, features without faces dropped and the rest renumbered, and on an exact tessellation
 // the surfaces refitted to every vertex.
@@ -139,7 +173,7 @@ void settle_features(FeatureState& s) {
   // which counts such facets as a sign of a freeform surface; and not within the tolerance, which
   // would give the small pieces of a freeform surface to the planes beside it.)
   if (s.exact_mesh)
-    absorb_fragments(s.mesh, s.topology, patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size())),
+    absorb_fragments(s.mesh, s.topology, s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size())),
                      s.exact_distance, s.layer.features, s.layer.labels);
   compact_features(s.layer.labels, s.layer.features);
   count_faces(s.area, s.layer.labels, s.layer.features);
@@ -149,7 +183,7 @@ void settle_features(FeatureState& s) {
   // narrow band undetermined: those of a chamfer cone one facet row wide lie on one circle, which
   // a cone of any half-angle passes through.)
   if (s.exact_mesh) {
-    const std::vector<PatchPoints> whole = patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size()), -1);
+    const std::vector<PatchPoints> whole = s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size()), -1);
     std::vector<char> which(s.layer.features.size(), 0);
     for (size_t p = 0; p < which.size(); ++p) which[p] = s.layer.features[p].type != SurfaceType::Freeform;
     on_two_threads(
@@ -171,7 +205,7 @@ void classify_features(FeatureState& s) {
   // the edge stages refit a cone as a cone.
   if (!s.exact_mesh && std::any_of(s.layer.features.begin(), s.layer.features.end(),
                                  [](const Feature& f) { return f.type == SurfaceType::Cone; })) {
-    const std::vector<PatchPoints> cone_points = patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size()));
+    const std::vector<PatchPoints> cone_points = s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size()));
     const double normal_floor = s.options.normal_floor_degrees * M_PI / 180.0;
     for (size_t p = 0; p < s.layer.features.size(); ++p) {
       Feature& f = s.layer.features[p];
@@ -206,6 +240,10 @@ void classify_features(FeatureState& s) {
         (s.exact_mesh || f.spread > s.options.freeform_relative_size * std::sqrt(f.area)))
       f.type = SurfaceType::Freeform;
   if (join_freeform_features(s.mesh, s.topology, s.layer.labels, s.layer.features)) count_faces(s.area, s.layer.labels, s.layer.features);
+  // (After the freeform features took their slivers: a group's facets turn by up to the largest
+  // facet turn, and would take every plane of few vertices beside it.)
+  if (s.exact_mesh && join_unplaced_facets(s.mesh, s.topology, s.layer.labels, s.layer.features))
+    count_faces(s.area, s.layer.labels, s.layer.features);
   // After the freeform features took their slivers: the planes tangent to a swept face's ends may be
   // as small in the export.
   if (s.exact_mesh && join_sampled_extrusions(s.mesh, s.topology, s.layer.distance_tolerance, s.exact_distance, s.floor,
@@ -222,8 +260,8 @@ void relate_features(FeatureState& s) {
   // The labels stay as they are from here on: each feature's interior points (what its fit saw) and
   // every vertex of its faces serve the steps below and idealization.
   const int feature_count = static_cast<int>(s.layer.features.size());
-  s.points = patch_points(s.mesh, s.layer.labels, feature_count);
-  s.whole = patch_points(s.mesh, s.layer.labels, feature_count, -1);
+  s.points = s.points_of(s.layer.labels, feature_count);
+  s.whole = s.points_of(s.layer.labels, feature_count, -1);
   make_balls_of_corner_cylinders(s.mesh, s.topology, angle_tolerance, s.layer.distance_tolerance, s.options, s.layer.labels,
                                  s.points, s.layer.features);
   s.layer.form_deviation = form_deviation(s.mesh, s.layer.labels, s.layer.features);

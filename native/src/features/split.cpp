@@ -690,7 +690,7 @@ void identify_pieces(Splitting& split, int next_id, const ProgressSpan& span) {
   for (int f = 0; f < s.mesh.num_faces(); ++f)  // a split region keeps the curvature of its patch
     if (s.layer.labels[f] >= num_patches) s.curvature[s.layer.labels[f]] = s.patch_curvature[s.segment_labels[f]];
   span.step(0.5);
-  s.points = patch_points(s.mesh, s.layer.labels, next_id);
+  s.points = s.points_of(s.layer.labels, next_id);
   s.identify_all(s.points, which, span.sub(0.6, 0.8));
   split.keep_generalized();
 }
@@ -710,7 +710,7 @@ void grow_in_large_pieces(Splitting& split, int next_id, const ProgressSpan& spa
     which[p] = next_id > first_new;
   }
   if (next_id > pieces) {
-    s.points = patch_points(s.mesh, s.layer.labels, next_id);
+    s.points = s.points_of(s.layer.labels, next_id);
     s.identify_all(s.points, which, span.sub(0.5, 1.0));
     split.keep_generalized();
   }
