@@ -371,7 +371,7 @@ bool merge_patches(const TriangleMesh& mesh, const MeshTopology& topology, const
 // tessellation, when no pair merges any more, the small pieces left are tried as surfaces together,
 // absorbed by a neighbour, or shattered into facets (exact_fragments.h).
 void merge_stage(FeatureState& s) {
-  if (s.rimless) s.points = s.points_of(s.layer.labels, s.patches);  // what merging sees: the whole rim
+  if (s.rimless) s.points = patch_points(s.mesh, s.layer.labels, s.patches);  // what merging sees: the whole rim
   const auto identify_points = [&](const PatchPoints& pp, const PatchCurvature& c) { return s.identify_points(pp, c); };
   std::set<std::pair<int, int>> rejected;
   // Later passes refit fewer open pairs, and most runs stop early: each pass takes a third of
@@ -404,7 +404,7 @@ void merge_stage(FeatureState& s) {
     }
     if (!merged) break;
     this_pass.step(0.9);
-    s.points = s.points_of(s.layer.labels, s.patches);
+    s.points = patch_points(s.mesh, s.layer.labels, s.patches);
   }
   merge.step(1.0);
 }

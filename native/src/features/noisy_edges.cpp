@@ -28,7 +28,7 @@ void fit_noisy_edges(FeatureState& s) {
   shared.distance_tolerance = s.layer.distance_tolerance;
   shared.residual_ratio = s.options.residual_ratio;
   shared.normal_floor = s.options.normal_floor_degrees * M_PI / 180.0;
-  const std::vector<PatchPoints> feature_points = s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size()));
+  const std::vector<PatchPoints> feature_points = patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size()));
   fit_about_shared_axes(feature_points, shared, s.layer.features);
   fillets_between_planes(feature_points, adjacent_pairs(s.mesh, s.topology, s.layer.labels), shared, s.layer.features);
   // Fillets too narrow for a patch of their own, which the features beside them took; cylinders and
@@ -49,7 +49,7 @@ void fit_noisy_edges(FeatureState& s) {
     if (find != round_edges)
       for (size_t p = 0; p < changed.size(); ++p) touched[p] |= changed[p];
     if (std::find(changed.begin(), changed.end(), 1) == changed.end()) continue;
-    const std::vector<PatchPoints> now = s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size()));
+    const std::vector<PatchPoints> now = patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size()));
     on_two_threads(
         largest_first(now, changed),
         [&](int p) {
@@ -72,7 +72,7 @@ void fit_noisy_edges(FeatureState& s) {
   // type, parallel, radii that relations would take for equal), and not two that the finders
   // above just split apart.
   // The points and neighbours of the features, for the remerge and the tangent tori after it.
-  std::vector<PatchPoints> settled = s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size()));
+  std::vector<PatchPoints> settled = patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size()));
   std::vector<std::pair<int, int>> beside = adjacent_pairs(s.mesh, s.topology, s.layer.labels);
   {
     std::set<std::pair<int, int>> apart;
@@ -87,7 +87,7 @@ void fit_noisy_edges(FeatureState& s) {
                       s.noise, s.layer.features, s.layer.labels, apart, s.progress.sub("remerge", 0.98, 0.98))) {
       compact_features(s.layer.labels, s.layer.features);
       count_faces(s.area, s.layer.labels, s.layer.features);
-      settled = s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size()));
+      settled = patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size()));
       beside = adjacent_pairs(s.mesh, s.topology, s.layer.labels);
     }
   }
@@ -100,7 +100,7 @@ void fit_noisy_edges(FeatureState& s) {
   tori_between_planes_and_walls(settled, beside, shared, s.layer.features);
   if (join_torus_pieces(settled, beside, s.options.residual_ratio, shared.normal_floor, s.layer.features, s.layer.labels))
     count_faces(s.area, s.layer.labels, s.layer.features);
-  planes_on_curved_surfaces(s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size()), -1), shared,
+  planes_on_curved_surfaces(patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size()), -1), shared,
                             s.layer.features);
 }
 

@@ -37,31 +37,8 @@ std::vector<int> vertex_labels(const TriangleMesh& mesh, const std::vector<int>&
   return out;
 }
 
-std::vector<char> chord_vertices(const TriangleMesh& mesh, const MeshTopology& topology, double distance) {
-  std::vector<char> chord(mesh.num_vertices(), 0);
-  std::vector<int> around;
-  for (int v = 0; v < mesh.num_vertices(); ++v) {
-    around.clear();
-    for (const int* f = topology.vertex_faces_begin(v); f != topology.vertex_faces_end(v); ++f)
-      for (int c = 0; c < 3; ++c)
-        if (mesh.F(*f, c) != v) around.push_back(mesh.F(*f, c));
-    std::sort(around.begin(), around.end());
-    around.erase(std::unique(around.begin(), around.end()), around.end());
-    const Eigen::Vector3d p = mesh.V.row(v).transpose();
-    for (size_t i = 0; i < around.size() && !chord[v]; ++i)
-      for (size_t j = i + 1; j < around.size() && !chord[v]; ++j) {
-        const Eigen::Vector3d a = mesh.V.row(around[i]).transpose(), d = mesh.V.row(around[j]).transpose() - a;
-        const double length2 = d.squaredNorm();
-        if (!(length2 > 0.0)) continue;
-        const double t = (p - a).dot(d) / length2;
-        chord[v] = t > 0.0 && t < 1.0 && (p - a - t * d).norm() <= distance;
-      }
-  }
-  return chord;
-}
-
 std::vector<PatchPoints> patch_points(const TriangleMesh& mesh, const std::vector<int>& labels, int num_patches,
-                                      int rim_rings, const std::vector<char>* unseen) {
+                                      int rim_rings) {
   // Faces bucketed by patch (counting sort).
   std::vector<int> offset(num_patches + 1, 0);
   for (int l : labels)
@@ -86,7 +63,7 @@ std::vector<PatchPoints> patch_points(const TriangleMesh& mesh, const std::vecto
   std::vector<PatchPoints> out(num_patches);
   for (int p = 0; p < num_patches; ++p)
     out[p] = face_points(mesh, faces.data() + offset[p], offset[p + 1] - offset[p], slot,
-                         [&](int v) { return rim_rings >= 0 && shared[v] == p; }, unseen);
+                         [&](int v) { return rim_rings >= 0 && shared[v] == p; });
   return out;
 }
 

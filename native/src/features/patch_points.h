@@ -25,21 +25,14 @@ constexpr int kSeveral = -2;
 // parameters) with noise.
 constexpr int kInteriorPoints = 24;
 
-// The vertices that lie on the straight segment between two of their neighbours, to within
-// `distance` (#V, 1 for such a vertex). A CAD exporter leaves them on the chords of a curved face
-// where a neighbouring face's border needed a vertex: they lie on the chord, off the surface by
-// its sag, and tell a fit nothing that the chord's ends do not.
-std::vector<char> chord_vertices(const TriangleMesh& mesh, const MeshTopology& topology, double distance);
-
 // What a fit sees of a set of faces: their vertices (a third of the area of the faces around each)
 // and the faces themselves (centroid, normal, area). When at least kInteriorPoints of the vertices
 // are `interior`, only those are kept: on a scan the rim of a patch lies on the rounded-off edge,
-// while a coarse CAD face may have no interior vertex and its rim lies on the surface. Vertices
-// marked in `unseen` (#V, or null) are left out, unless fewer than three would remain. `slot` is a
+// while a coarse CAD face may have no interior vertex and its rim lies on the surface. `slot` is a
 // per-vertex scratch array of -1, left as it was found.
 template <typename Interior>
 PatchPoints face_points(const TriangleMesh& mesh, const int* faces, int count, std::vector<int>& slot,
-                        const Interior& interior, const std::vector<char>* unseen = nullptr) {
+                        const Interior& interior) {
   PatchPoints pp;
   pp.sample_points.resize(count, 3);
   pp.sample_normals.resize(count, 3);
@@ -64,20 +57,15 @@ PatchPoints face_points(const TriangleMesh& mesh, const int* faces, int count, s
       vertex_area[slot[v]] += area / 3.0;
     }
   }
-  const auto seen = [&](int v) { return !unseen || !(*unseen)[v]; };
-  const bool skip_unseen = unseen && std::count_if(vertices.begin(), vertices.end(), seen) >= 3;
-  const auto kept = [&](int v) { return !skip_unseen || seen(v); };
-  const auto interior_count =
-      std::count_if(vertices.begin(), vertices.end(), [&](int v) { return kept(v) && interior(v); });
+  const auto interior_count = std::count_if(vertices.begin(), vertices.end(), interior);
   const bool interior_only = interior_count >= kInteriorPoints;
-  const auto kept_count = interior_only ? interior_count : std::count_if(vertices.begin(), vertices.end(), kept);
-  pp.points.resize(static_cast<Eigen::Index>(kept_count), 3);
+  pp.points.resize(interior_only ? interior_count : static_cast<Eigen::Index>(vertices.size()), 3);
   pp.weights.resize(pp.points.rows());
   Eigen::Index k = 0;
   for (size_t i = 0; i < vertices.size(); ++i) {
     const int v = vertices[i];
     slot[v] = -1;
-    if (!kept(v) || (interior_only && !interior(v))) continue;
+    if (interior_only && !interior(v)) continue;
     pp.points.row(k) = mesh.V.row(v);
     pp.weights[k] = vertex_area[i];
     ++k;
@@ -93,9 +81,9 @@ std::vector<int> vertex_labels(const TriangleMesh& mesh, const std::vector<int>&
 
 // What the fits see of every patch (face_points, interior: the vertices only the patch touches,
 // and with `rim_rings` > 0 not on that many rings of faces along its rim either; with `rim_rings`
-// < 0 every vertex of the patch's faces), without the vertices marked in `unseen` (see face_points).
+// < 0 every vertex of the patch's faces).
 std::vector<PatchPoints> patch_points(const TriangleMesh& mesh, const std::vector<int>& labels, int num_patches,
-                                      int rim_rings = 0, const std::vector<char>* unseen = nullptr);
+                                      int rim_rings = 0);
 
 // The angle between the normals of faces f and g (π for a degenerate face).
 double facet_turn(const TriangleMesh& mesh, int f, int g);

@@ -44,13 +44,8 @@ FeatureState::FeatureState(const TriangleMesh& mesh, const std::vector<int>& lab
   layer.distance_tolerance = options.distance_tolerance > 0.0 ? options.distance_tolerance : 1e-3 * diagonal;
   layer.angle_tolerance_degrees = options.angle_tolerance_degrees;
   exact_distance = std::max(kExactFraction * layer.distance_tolerance, 2.0 * floor);
-  chords = chord_vertices(mesh, topology, exact_distance);
   noise = floor;  // until the split stage measures it
   layer.labels = labels;
-}
-
-std::vector<PatchPoints> FeatureState::points_of(const std::vector<int>& labels, int num, int rim_rings) const {
-  return patch_points(mesh, labels, num, rim_rings, exact_mesh ? &chords : nullptr);
 }
 
 Feature FeatureState::identify_points(const PatchPoints& pp, const PatchCurvature& c) const {
@@ -111,7 +106,7 @@ bool FeatureState::dissolve_strips() {
   if (exact_mesh) return false;
   const std::vector<char> changed = dissolve_explained_patches(mesh, topology, flood_surfaces(), layer.labels, progress);
   if (std::find(changed.begin(), changed.end(), 1) == changed.end()) return false;
-  points = points_of(layer.labels, patches, 1);
+  points = patch_points(mesh, layer.labels, patches, 1);
   refit_changed(changed, ProgressSpan());
   return true;
 }
@@ -120,7 +115,7 @@ namespace {
 
 // Every patch of the segmentation identified.
 void fit_patches(FeatureState& s) {
-  s.points = s.points_of(s.layer.labels, s.num_patches);
+  s.points = patch_points(s.mesh, s.layer.labels, s.num_patches);
   s.identify_all(s.points, std::vector<char>(s.num_patches, 1), s.progress.sub(0.01, 0.06));
 }
 
@@ -136,7 +131,7 @@ void relax_borders(FeatureState& s) {
     // Each border went to the surface that the noise of its faces happened to favour: fitted to
     // them, a fillet's radius drifts from round to round (on the bracket's noisy scan one came
     // out 7 % large), so the refits leave out a ring of faces along every rim.
-    s.points = s.points_of(s.layer.labels, s.patches, 1);
+    s.points = patch_points(s.mesh, s.layer.labels, s.patches, 1);
     s.refit_changed(changed, ProgressSpan());
   }
 }

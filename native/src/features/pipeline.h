@@ -50,8 +50,6 @@ struct FeatureState {
   FeatureLayer layer;           // the result: labels, features, graph, idealized mesh, timings
   // What an exact tessellation's vertices may deviate from their surface.
   double exact_distance = 0.0;
-  // #V: the vertices on a straight segment between two neighbours, which no fit sees (chord_vertices).
-  std::vector<char> chords;
   std::vector<PatchCurvature> curvature;  // per patch, growing with split patches
   std::vector<char> was_split;            // per patch: 1 split as an exact tessellation, 2 as a noisy mesh
   std::vector<PatchPoints> points;        // what the fits see of every patch, as the last stage left it
@@ -67,9 +65,6 @@ struct FeatureState {
   int patches = 0;            // features after splitting; merging keeps their ids until `settle`
   bool rimless = false;       // whether `points` leave out a ring of faces along every rim
 
-  // What the fits see of every patch (patch_points; on an exact tessellation without its chord
-  // vertices, which lie off the surface by a chord's sag).
-  std::vector<PatchPoints> points_of(const std::vector<int>& labels, int num_patches, int rim_rings = 0) const;
   // The patch identified from its points and curvature (identify.h).
   Feature identify_points(const PatchPoints& pp, const PatchCurvature& c) const;
   // Identifies the patches p with which[p] from `patch_points`, on two threads.

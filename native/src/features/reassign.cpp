@@ -76,7 +76,7 @@ void reassign_rims(FeatureState& s, const ProgressSpan& span) {
         reassign_faces(s.mesh, s.topology, s.layer.features, s.options, s.floor, s.layer.labels, this_round);
     if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
     this_round.step(0.4);
-    s.points = s.points_of(s.layer.labels, patches);
+    s.points = patch_points(s.mesh, s.layer.labels, patches);
     s.refit_changed(changed, this_round.sub(0.5, 1.0));
   }
   // A patch that lost or gained a good part of its faces may be of another type now (the rim of

@@ -173,7 +173,7 @@ void settle_features(FeatureState& s) {
   // which counts such facets as a sign of a freeform surface; and not within the tolerance, which
   // would give the small pieces of a freeform surface to the planes beside it.)
   if (s.exact_mesh)
-    absorb_fragments(s.mesh, s.topology, s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size())),
+    absorb_fragments(s.mesh, s.topology, patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size())),
                      s.exact_distance, s.layer.features, s.layer.labels);
   compact_features(s.layer.labels, s.layer.features);
   count_faces(s.area, s.layer.labels, s.layer.features);
@@ -183,7 +183,7 @@ void settle_features(FeatureState& s) {
   // narrow band undetermined: those of a chamfer cone one facet row wide lie on one circle, which
   // a cone of any half-angle passes through.)
   if (s.exact_mesh) {
-    const std::vector<PatchPoints> whole = s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size()), -1);
+    const std::vector<PatchPoints> whole = patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size()), -1);
     std::vector<char> which(s.layer.features.size(), 0);
     for (size_t p = 0; p < which.size(); ++p) which[p] = s.layer.features[p].type != SurfaceType::Freeform;
     on_two_threads(
@@ -205,7 +205,7 @@ void classify_features(FeatureState& s) {
   // the edge stages refit a cone as a cone.
   if (!s.exact_mesh && std::any_of(s.layer.features.begin(), s.layer.features.end(),
                                  [](const Feature& f) { return f.type == SurfaceType::Cone; })) {
-    const std::vector<PatchPoints> cone_points = s.points_of(s.layer.labels, static_cast<int>(s.layer.features.size()));
+    const std::vector<PatchPoints> cone_points = patch_points(s.mesh, s.layer.labels, static_cast<int>(s.layer.features.size()));
     const double normal_floor = s.options.normal_floor_degrees * M_PI / 180.0;
     for (size_t p = 0; p < s.layer.features.size(); ++p) {
       Feature& f = s.layer.features[p];
@@ -260,8 +260,8 @@ void relate_features(FeatureState& s) {
   // The labels stay as they are from here on: each feature's interior points (what its fit saw) and
   // every vertex of its faces serve the steps below and idealization.
   const int feature_count = static_cast<int>(s.layer.features.size());
-  s.points = s.points_of(s.layer.labels, feature_count);
-  s.whole = s.points_of(s.layer.labels, feature_count, -1);
+  s.points = patch_points(s.mesh, s.layer.labels, feature_count);
+  s.whole = patch_points(s.mesh, s.layer.labels, feature_count, -1);
   make_balls_of_corner_cylinders(s.mesh, s.topology, angle_tolerance, s.layer.distance_tolerance, s.options, s.layer.labels,
                                  s.points, s.layer.features);
   s.layer.form_deviation = form_deviation(s.mesh, s.layer.labels, s.layer.features);

@@ -562,7 +562,7 @@ double weighted_quantile(std::vector<std::pair<double, double>> values, double s
 // export, or a remesh whose vertices were projected onto the part, the patches that cover one face
 // do, however many others the segmentation joined across edges. Measured on the test data's 61
 // parts and 9 real meshes, the share of the evidence in such patches is 0 on every scan-like mesh
-// and at most 0.07 on the sculpted ones (whose bumps leave some faces untouched), against 0.14 to
+// and at most 0.07 on the sculpted ones (whose bumps leave some faces untouched), against 0.11 to
 // 1 on the noiseless ones: a tenth lies between the two.
 //
 // An exact tessellation is a CAD export: its triangles lie on their faces, so that its patches fit
@@ -572,7 +572,7 @@ double weighted_quantile(std::vector<std::pair<double, double>> values, double s
 // typical patch's rim leaves its surface by a good part of an edge length: it is a measured surface
 // without noise. Returns false when no patch has a surface (nothing to measure).
 bool decide_mesh_kind(FeatureState& s) {
-  constexpr double kBestShare = 0.1;  // see above: between 0.07 (sculpted) and 0.14 (noiseless)
+  constexpr double kBestShare = 0.1;  // see above: between 0.07 (sculpted) and 0.11 (noiseless)
   std::vector<std::pair<double, double>> rms, normal_rms;
   for (size_t p = 0; p < s.layer.features.size(); ++p)
     if (const Feature& f = s.layer.features[p]; f.type != SurfaceType::Freeform) {
@@ -690,7 +690,7 @@ void identify_pieces(Splitting& split, int next_id, const ProgressSpan& span) {
   for (int f = 0; f < s.mesh.num_faces(); ++f)  // a split region keeps the curvature of its patch
     if (s.layer.labels[f] >= num_patches) s.curvature[s.layer.labels[f]] = s.patch_curvature[s.segment_labels[f]];
   span.step(0.5);
-  s.points = s.points_of(s.layer.labels, next_id);
+  s.points = patch_points(s.mesh, s.layer.labels, next_id);
   s.identify_all(s.points, which, span.sub(0.6, 0.8));
   split.keep_generalized();
 }
@@ -710,7 +710,7 @@ void grow_in_large_pieces(Splitting& split, int next_id, const ProgressSpan& spa
     which[p] = next_id > first_new;
   }
   if (next_id > pieces) {
-    s.points = s.points_of(s.layer.labels, next_id);
+    s.points = patch_points(s.mesh, s.layer.labels, next_id);
     s.identify_all(s.points, which, span.sub(0.5, 1.0));
     split.keep_generalized();
   }

@@ -51,7 +51,6 @@ class Refiner {
       }
     };
     std::priority_queue<Entry> queue;
-    std::vector<int> touched;
     const double max_squared = max_length * max_length;
     auto splittable = [&](int f, int c) {
       const int g = neighbors_[f][c];
@@ -73,36 +72,8 @@ class Refiner {
       queue.pop();
       const int c = corner_of_edge(top.face, top.a, top.b);
       if (c < 0) continue;  // already split from the other side, or moved to a new face (re-queued there)
-      touched.clear();
       for (int face : split(top.face, c))
-        if (face >= 0) touched.push_back(face);
-      legalize(touched);
-      std::sort(touched.begin(), touched.end());
-      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-      for (int face : touched) push(face);
-    }
-  }
-
-  // Lawson's flips after a split, between faces of one input triangle, until the faces around the
-  // new vertex are locally Delaunay again; `faces` gains every face a flip changed. Without them,
-  // bisecting a needle's longest edge joins the midpoint to the far corner by another edge of half
-  // the needle's length, and a fan of needles of length L fills with (L / h)² triangles each
-  // instead of about L / h.
-  void legalize(std::vector<int>& faces) {
-    std::vector<int> stack(faces.begin(), faces.end());
-    while (!stack.empty()) {
-      const int f = stack.back();
-      stack.pop_back();
-      for (int c = 0; c < 3; ++c) {
-        const int g = neighbors_[f][c];
-        if (g < 0 || origin_[g] != origin_[f] || !should_flip(f, c)) continue;
-        flip(f, c);
-        for (int h : {f, g}) {
-          stack.push_back(h);
-          faces.push_back(h);
-        }
-        break;
-      }
+        if (face >= 0) push(face);
     }
   }
 
