@@ -277,6 +277,8 @@ bool apply_verdicts(const std::vector<PatchPoints>& points, const FeatureOptions
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
     return x.cost != y.cost ? x.cost < y.cost : std::make_pair(x.a, x.b) < std::make_pair(y.a, y.b);
   });
+  std::vector<SurfaceType> type_before(features.size());
+  for (size_t p = 0; p < features.size(); ++p) type_before[p] = features[p].type;
   std::vector<char> merged(features.size(), 0);
   std::vector<int> into(features.size());
   for (size_t p = 0; p < into.size(); ++p) into[p] = static_cast<int>(p);
@@ -318,13 +320,17 @@ bool apply_verdicts(const std::vector<PatchPoints>& points, const FeatureOptions
   for (int& l : labels)
     if (l >= 0) l = into[l];
   // Pairs with a grown patch are open again, but on an exact tessellation not those of a patch that
-  // had the points to fix its surface: a surface that explains the grown patch and a neighbour
-  // exactly explains the patch as it was and that neighbour, which no surface did. (Reopening them
-  // re-judged every neighbour of a surface that takes its fragments one per call.)
+  // had the points to fix its surface and kept its type: a surface of that type that explains the
+  // grown patch and a neighbour exactly explains the patch as it was and that neighbour, which none
+  // did. (Reopening them re-judged every neighbour of a surface that takes its fragments one per
+  // call. A patch that changed type may now be explained with a neighbour by a third surface: the
+  // bands of a coarse torus.)
   std::vector<char> reopen(merged);
   if (exact)
     for (size_t p = 0; p < reopen.size(); ++p)
-      if (into[p] == static_cast<int>(p) && points[p].points.rows() >= kInteriorPoints) reopen[p] = 0;
+      if (into[p] == static_cast<int>(p) && points[p].points.rows() >= kInteriorPoints &&
+          features[p].type == type_before[p])
+        reopen[p] = 0;
   for (auto it = rejected.begin(); it != rejected.end();)
     it = reopen[it->first] || reopen[it->second] ? rejected.erase(it) : std::next(it);
   return any;

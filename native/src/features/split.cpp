@@ -583,10 +583,9 @@ bool decide_mesh_kind(FeatureState& s) {
   if (rms.empty()) return false;
   const double best_rms = weighted_quantile(rms, kBestShare);
   s.noiseless = best_rms < kExactFraction * s.layer.distance_tolerance;
-  // The noise of a noiseless mesh is what the patches that fit show; that of a noisy one what the
-  // typical patch shows (the lower median: of two patches, the one that fits shows the noise).
+  // The noise is what the typical patch shows (the lower median: of two patches, the one that fits
+  // shows the noise).
   auto typical = [&](std::vector<std::pair<double, double>>& values) {
-    if (s.noiseless) return weighted_quantile(values, kBestShare);
     const auto middle = values.begin() + (values.size() - 1) / 2;
     std::nth_element(values.begin(), middle, values.end());
     return middle->first;

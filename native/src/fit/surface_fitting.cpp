@@ -264,10 +264,6 @@ Surface refine(Surface surface, const Sample& s, const std::vector<double>& w, i
   const int n = static_cast<int>(s.p.size());
   if (n < k) return surface;
   constexpr double kStep = 1e-7;
-  // Points at 10⁻¹² of their spread from the surface (the sample is scaled to unit spread, the
-  // weights sum to one) lie on it as far as double precision tells: once there, further steps
-  // only fail, each after some 30 ever more damped tries.
-  constexpr double kExactCost = 1e-24;
   Eigen::MatrixXd jacobian(n, k);
   Eigen::VectorXd residual(n);
   std::vector<double> d(n), sqrt_w(n);
@@ -275,7 +271,7 @@ Surface refine(Surface surface, const Sample& s, const std::vector<double>& w, i
   double current = cost(surface, s, w, d);
   std::vector<double> d_current = d;  // distances to `surface`, kept from the accepted step's cost
   double lambda = 1e-3;
-  for (int it = 0; it < max_iterations && current > kExactCost; ++it) {
+  for (int it = 0; it < max_iterations; ++it) {
     for (int i = 0; i < n; ++i) residual[i] = sqrt_w[i] * d_current[i];
     for (int j = 0; j < k; ++j) {
       double step[7] = {0, 0, 0, 0, 0, 0, 0};

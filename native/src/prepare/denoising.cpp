@@ -90,19 +90,13 @@ MatrixX3d filtered_face_normals(const TriangleMesh& mesh, const MeshTopology& to
       centroid_distance += distances[k];
       if (jumps[k] > kCoplanar) normal_jumps.push_back(jumps[k]);
     }
+  // A flat mesh, or one whose only folds are edges of the part (a box's tessellation): nothing to
+  // filter. (A range kernel measured on edges would smooth across them.)
+  if (std::none_of(normal_jumps.begin(), normal_jumps.end(), [&](double j) { return j <= edge_jump; }))
+    return g.normal;
+  centroid_distance /= static_cast<double>(ring.size() - nf);
   auto middle = normal_jumps.begin() + normal_jumps.size() / 2;
-  if (!normal_jumps.empty()) std::nth_element(normal_jumps.begin(), middle, normal_jumps.end());
-  // On a noiseless mesh (most neighbours coplanar) whose typical fold is an edge of the part, the
-  // facet folds are what is left. (On a noisy one the typical fold is noise, however sharp.)
-  const size_t pairs = ring.size() - static_cast<size_t>(nf);
-  if (2 * normal_jumps.size() < pairs && !normal_jumps.empty() && *middle > edge_jump) {
-    normal_jumps.erase(std::remove_if(normal_jumps.begin(), normal_jumps.end(), [&](double j) { return j > edge_jump; }),
-                       normal_jumps.end());
-    middle = normal_jumps.begin() + normal_jumps.size() / 2;
-    if (!normal_jumps.empty()) std::nth_element(normal_jumps.begin(), middle, normal_jumps.end());
-  }
-  if (normal_jumps.empty()) return g.normal;  // a flat mesh, or one whose only folds are edges: nothing to filter
-  centroid_distance /= static_cast<double>(pairs);
+  std::nth_element(normal_jumps.begin(), middle, normal_jumps.end());
   const double sigma_range = options.range_factor * *middle;
   if (!(sigma_range > 0.0) || !(centroid_distance > 0.0)) return g.normal;
 

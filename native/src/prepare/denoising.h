@@ -21,11 +21,8 @@ struct DenoisingOptions {
   // and are not mixed across.
   double range_factor = 1.5;
   // Folds turning by more than this angle (radians) are edges of the part, neither noise nor facet
-  // folds. On a noiseless mesh (most neighbouring faces coplanar) whose median fold is such an
-  // edge, the range kernel's width is measured without them, and with nothing else left (a box's
-  // tessellation, whose only folds are its edges) there is nothing to filter. (On a noisy mesh
-  // the median fold is noise, and on a marching-cubes scan it may be that sharp.) 0 counts every
-  // fold; segmentation passes the angle its first pass calls sharp.
+  // folds: a mesh whose only folds are such edges (a box's tessellation) is not filtered at all.
+  // 0 takes every fold for noise; segmentation passes the angle its first pass calls sharp.
   double edge_fold = 0.0;
 };
 
