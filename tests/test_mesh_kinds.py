@@ -4,15 +4,7 @@ import numpy as np
 import idealize
 import shapes
 from shapes import needs_shared_data
-
-
-def layer_surface_score(m, layer):
-    """Surfaces correct (the benchmark's score: faces on one surface joined) of `layer` on the
-    benchmark mesh `m`."""
-    ground_truth = shapes.bench_module("ground_truth")
-    truth = ground_truth.part_ground_truth(shapes.SHARED_STEP / m.part)
-    surface_of = ground_truth.surface_of_face(truth)
-    return shapes.bench_module("scoring").score(layer.labels, surface_of[m.gt], shapes.triangle_areas(m.V, m.F))
+from test_features import benchmark_surface_score
 
 
 @needs_shared_data
@@ -22,10 +14,8 @@ def test_cad_export_stays_exact_when_segmentation_joins_faces():
     exactly. The median patch did not, and the part, taken for a measured surface, lost most faces.
     Its sculpted variant, which undulates, is measured."""
     name = "as_isolated_blends_test_28.step"
-    cad = shapes.benchmark_mesh(name, "cad")
-    layer = idealize.idealize(idealize.Mesh(cad.V, cad.F))
+    _, layer, _, score = benchmark_surface_score(name, "cad")
     assert layer.mesh_kind == "exact tessellation"
-    score = layer_surface_score(cad, layer)
     assert score["correct"] >= 0.9 * score["faces"], score["correct"]
     sculpt = shapes.benchmark_mesh(name, "sculpt")
     assert idealize.idealize(idealize.Mesh(sculpt.V, sculpt.F)).mesh_kind == "measured surface"

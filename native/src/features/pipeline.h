@@ -54,8 +54,8 @@ struct FeatureState {
   std::vector<char> was_split;            // per patch: 1 split as an exact tessellation, 2 as a noisy mesh
   std::vector<PatchPoints> points;        // what the fits see of every patch, as the last stage left it
   std::vector<PatchPoints> whole;         // every vertex of each feature's faces (from `relations` on)
-  // The mesh's kind and noise, decided by the split stage from the typical patch's fit: an exact
-  // tessellation (its vertices on their faces, as a CAD export's) or a measured surface.
+  // The mesh's kind and noise, decided by the split stage from the patches' fits (decide_mesh_kind):
+  // an exact tessellation (its vertices on their faces, as a CAD export's) or a measured surface.
   bool exact_mesh = false;
   bool noiseless = false;     // the best-fitting tenth of the patches fits to a hundredth of the tolerance (exact or not)
   double noise = 0.0;         // the typical patch's spread (distance)

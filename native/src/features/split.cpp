@@ -573,31 +573,29 @@ double weighted_quantile(std::vector<std::pair<double, double>> values, double s
 // without noise. Returns false when no patch has a surface (nothing to measure).
 bool decide_mesh_kind(FeatureState& s) {
   constexpr double kBestShare = 0.1;  // see above: between 0.07 (sculpted) and 0.11 (noiseless)
-  std::vector<std::pair<double, double>> rms, normal_rms;
+  std::vector<std::pair<double, double>> weighed;  // (spread, evidence)
+  std::vector<double> rms, normal_rms;
   for (size_t p = 0; p < s.layer.features.size(); ++p)
     if (const Feature& f = s.layer.features[p]; f.type != SurfaceType::Freeform) {
       const double evidence = std::max(0.0, static_cast<double>(s.points[p].points.rows()) - parameter_count(f.type));
-      rms.push_back({f.spread, evidence});
-      normal_rms.push_back({f.normal_spread, evidence});
+      weighed.push_back({f.spread, evidence});
+      rms.push_back(f.spread);
+      normal_rms.push_back(f.normal_spread);
     }
   if (rms.empty()) return false;
-  const double best_rms = weighted_quantile(rms, kBestShare);
-  s.noiseless = best_rms < kExactFraction * s.layer.distance_tolerance;
+  s.noiseless = weighted_quantile(weighed, kBestShare) < kExactFraction * s.layer.distance_tolerance;
   // The noise is what the typical patch shows (the lower median: of two patches, the one that fits
   // shows the noise).
-  auto typical = [&](std::vector<std::pair<double, double>>& values) {
-    const auto middle = values.begin() + (values.size() - 1) / 2;
-    std::nth_element(values.begin(), middle, values.end());
-    return middle->first;
-  };
-  s.noise = typical(rms) + s.floor;
-  s.normal_noise += typical(normal_rms);
+  const size_t middle = (rms.size() - 1) / 2;
+  std::nth_element(rms.begin(), rms.begin() + middle, rms.end());
+  std::nth_element(normal_rms.begin(), normal_rms.begin() + middle, normal_rms.end());
+  s.noise = rms[middle] + s.floor;
+  s.normal_noise += normal_rms[middle];
   if (s.noiseless) {
     std::vector<double> farthest;
     const std::vector<double> farthest_vertex = farthest_vertices(s);
     for (size_t p = 0; p < s.layer.features.size(); ++p)
       if (s.layer.features[p].type != SurfaceType::Freeform) farthest.push_back(farthest_vertex[p]);
-    const size_t middle = (farthest.size() - 1) / 2;
     std::nth_element(farthest.begin(), farthest.begin() + middle, farthest.end());
     s.exact_mesh = farthest[middle] < s.exact_distance || !uniformly_sampled(s.mesh);
   }

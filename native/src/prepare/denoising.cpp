@@ -3,8 +3,8 @@
 #include "core/parallel.h"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace idealize {
