@@ -55,6 +55,18 @@ def test_cad_tessellation_with_long_thin_triangles(tmp_path):
     np.testing.assert_allclose(pieces, shapes.triangle_areas(V, F), rtol=1e-9, atol=0)
 
 
+@pytest.mark.parametrize("name", ["as_pockets_6.stp", "as_setbt_f8205080_hem.stp"])
+def test_fans_of_slivers_refine_to_an_even_sampling(name):
+    """A CAD export whose planes are fans of long slivers, so that its median edge is far shorter than
+    its sampling, refines to about an even sampling of its surface, not to its shortest edges: at
+    most RefinementOptions::max_oversampling (12) times an even sampling of 20000 triangles. (Refined
+    to the median edge, the first part's 556 triangles became 672k, the second's 4064 1.46 million.)"""
+    m = shapes.benchmark_mesh(name, "cad")
+    seg = idealize.segment(idealize.Mesh(m.V, m.F))
+    assert len(seg.working["working_faces"]) <= 12 * max(len(m.F), 20000)
+    assert (seg.labels >= 0).all()
+
+
 def test_scan_like_mesh_finds_every_face(bracket_scan):
     """Chamfered edges from uniform re-tessellation: one patch per face, none leaking into another."""
     V, F, gt, _ = bracket_scan

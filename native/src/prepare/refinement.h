@@ -13,9 +13,10 @@
 namespace idealize {
 
 struct RefinementOptions {
-  // Target edge length; 0 derives it from the data: the median input edge length, but no
-  // coarser than a sampling of about `min_samples` triangles over the whole surface and no finer
-  // than `max_triangles` in total.
+  // Target edge length; 0 derives it from the data: the median input edge length (or, where that is
+  // under half of it, the edge of an even sampling with the input's triangle count: a CAD
+  // tessellation's fans of slivers), but no coarser than a sampling of about `min_samples` triangles
+  // over the whole surface and no finer than `max_triangles` in total.
   double target_edge_length = 0.0;
   int min_samples = 20000;        // the thesis's meshes had 60–75k triangles; a third of that resolves
                                   // every feature wider than a few triangles
