@@ -257,21 +257,22 @@ RefinedMesh refine_long_triangles(const TriangleMesh& mesh, const MeshTopology& 
                                   const RefinementOptions& options, const ProgressSpan& progress) {
   const double area = face_areas(mesh).sum();
   constexpr double kEquilateralArea = 0.43301270189221935;  // area of a unit equilateral triangle
+  // The edge length of an even sampling of the surface with that many triangles.
+  const auto even_edge = [&](double triangles) { return std::sqrt(area / (kEquilateralArea * triangles)); };
   double target = options.target_edge_length;
   if (target <= 0.0) {
-    const double coarsest = std::sqrt(area / (kEquilateralArea * options.min_samples));
+    const double coarsest = even_edge(options.min_samples);
     const double median = median_edge_length(mesh, topology);
-    // The edge of an even sampling of the surface with the input's triangle count. A remesher's or
-    // a scanner's edges are about that long (measured on the benchmark's remeshed and marching-cubes
-    // meshes: 0.88 to 1.07 times it). A CAD tessellation may cut its fillets finely and its planes
-    // into fans of long slivers: its median edge is then short and says nothing of its sampling
-    // (its CAD exports: 0.04 to 2.6 times it), and splitting every sliver down to it made up to 1,200
-    // times the input's triangles. Where the median is under half the even edge, the even edge
-    // stands.
-    const double even = std::sqrt(area / (kEquilateralArea * std::max(mesh.num_faces(), 1)));
+    // The even sampling's edge with the input's triangle count. A remesher's or a scanner's edges
+    // are about that long (measured on the benchmark's remeshed and marching-cubes meshes: 0.88 to
+    // 1.07 times it). A CAD tessellation may cut its fillets finely and its planes into fans of long
+    // slivers: its median edge is then short and says nothing of its sampling (its CAD exports: 0.04
+    // to 2.6 times it), and splitting every sliver down to it made up to 1,200 times the input's
+    // triangles. Where the median is under half the even edge, the even edge stands.
+    const double even = even_edge(std::max(mesh.num_faces(), 1));
     target = std::min(even > 2.0 * median ? even : median, coarsest);
   }
-  const double finest = std::sqrt(area / (kEquilateralArea * options.max_triangles));
+  const double finest = even_edge(options.max_triangles);
   target = std::max(target, finest);
 
   Refiner refiner(mesh, topology);
