@@ -85,6 +85,50 @@ def rotate(layer, feature_ids, degrees, axis=None, center=None, keep=None, remes
     return _edit(layer, ids, motion=motion, keep=keep, remesh=remesh)
 
 
+def feature_group(layer, feature_id):
+    """The feature group that feature `feature_id` belongs to: a boss with its walls, top and the
+    blends at its base, a hole with its chamfers, a pocket with its walls and floor. The group ends
+    at its hosts, the planes and cylinders around which it is an island (thesis 6.2). A feature of
+    the part's outline has no group of its own: the group is the feature alone.
+
+    Returns ``{"members": [ids], "hosts": [ids]}``, sorted; the user may add or drop members before
+    passing them to :func:`delete`."""
+    layer = as_feature_layer(layer)
+    _feature(layer, feature_id)
+    faces, labels = _kept_triangles(layer)
+    group = native.feature_group(
+        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64), faces, labels,
+        [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features], int(feature_id))
+    return {"members": list(group["members"]), "hosts": list(group["hosts"])}
+
+
+def delete(layer, feature_ids, remesh=True):
+    """Deletes features, usually a group of :func:`feature_group`: their triangles are lifted off and
+    each gap is closed on the plane or cylinder around it, which is remeshed. The other features keep
+    their surfaces exactly; they are renumbered in order (``layer.renumbered`` maps each old id
+    that remains to its new one). A gap that no single plane or cylinder surrounds raises
+    :class:`EditConflict` naming the features along it."""
+    layer = as_feature_layer(layer)
+    ids = _ids(feature_ids)
+    for f in ids:
+        _feature(layer, f)
+    start = time.perf_counter()
+    faces, labels = _kept_triangles(layer)
+    result = native.delete_features(
+        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64), faces, labels,
+        [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features],
+        list(layer.adjacency), ids, distance_tolerance=float(layer.distance_tolerance), remesh=bool(remesh),
+        target_edge_lengths=list(layer.edge_lengths or []))
+    kept = list(result["kept"])
+    renumbered = {old: new for new, old in enumerate(kept)}
+    result["params"] = [layer.features[old]["params"] for old in kept]
+    result["changed"] = [False] * len(kept)
+    out = _edited_layer(layer, result, _keep_flags(None), time.perf_counter() - start, renumbered)
+    out.changed = list(result["hosts"])
+    out.renumbered = renumbered
+    return out
+
+
 # The edits `apply` replays: {"op": name, ...the function's keyword arguments}.
 _OPERATIONS = {"push_pull": ("feature_id", "distance"), "set_parameter": ("feature_id", "name", "value"),
                "move": ("feature_ids", "translation"), "rotate": ("feature_ids", "degrees", "axis", "center")}
@@ -177,21 +221,50 @@ def _kept_triangles(layer):
     return np.ascontiguousarray(faces[keep]), np.ascontiguousarray(labels[keep])
 
 
-def _edited_layer(layer, result, flags, seconds):
+def _renumbered_graph(layer, renumbered):
+    """The layer's features, adjacency and relations with the features of `renumbered` (old id ->
+    new id) only, under their new ids: a relation keeps the members that remain, if two do."""
+    features = []
+    for old, new in sorted(renumbered.items(), key=lambda item: item[1]):
+        f = dict(layer.features[old])
+        f["id"] = new
+        features.append(f)
+    adjacency = []
+    for a in layer.adjacency:
+        if a["a"] in renumbered and a["b"] in renumbered:
+            a = dict(a)
+            a["a"], a["b"] = renumbered[a["a"]], renumbered[a["b"]]
+            adjacency.append(a)
+    relations = []
+    for r in layer.relations:
+        members = [renumbered[m] for m in r["features"] if m in renumbered]
+        if len(members) >= 2:  # the surfaces did not change: what held among them holds
+            r = dict(r)
+            r["features"] = members
+            relations.append(r)
+    return features, adjacency, relations
+
+
+def _edited_layer(layer, result, flags, seconds, renumbered=None):
     V, F, labels = result["V"], result["F"], result["labels"]
+    if renumbered is None:
+        features_before, adjacency, relations_before = layer.features, list(layer.adjacency), layer.relations
+    else:
+        features_before, adjacency, relations_before = _renumbered_graph(layer, renumbered)
     changed = result["changed"]
     deviation = result["vertex_deviation"]
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     areas = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    area = np.bincount(labels, weights=areas, minlength=len(layer.features))
-    triangles = np.bincount(labels, minlength=len(layer.features))
+    count = len(features_before)
+    area = np.bincount(labels, weights=areas, minlength=count)
+    triangles = np.bincount(labels, minlength=count)
     # Each feature's residual: its vertices' distances (the nearest of their features').
     corners = np.nan_to_num(deviation[F], nan=0.0)
-    squared = np.bincount(labels, weights=(corners ** 2).sum(axis=1), minlength=len(layer.features))
-    worst = np.zeros(len(layer.features))
+    squared = np.bincount(labels, weights=(corners ** 2).sum(axis=1), minlength=count)
+    worst = np.zeros(count)
     np.maximum.at(worst, labels, corners.max(axis=1))
     features = []
-    for f, params in zip(layer.features, result["params"]):
+    for f, params in zip(features_before, result["params"]):
         g = dict(f)
         if f["type"] != "freeform":
             g["params"] = params
@@ -202,11 +275,11 @@ def _edited_layer(layer, result, flags, seconds):
         g["triangles"] = int(triangles[f["id"]])
         features.append(g)
     # A relation kind the edit did not keep holds no more for the groups it changed.
-    relations = [r for r in layer.relations
+    relations = [r for r in relations_before
                  if flags.get(r["kind"], True) or not any(changed[m] for m in r["features"])]
     finite = deviation[np.isfinite(deviation)]
     edited = {
-        "labels": labels, "features": features, "adjacency": list(layer.adjacency), "relations": relations,
+        "labels": labels, "features": features, "adjacency": adjacency, "relations": relations,
         "idealized_vertices": V, "vertex_deviation": deviation,
         "max_deviation": float(finite.max()) if finite.size else 0.0,
         "rms_deviation": float(np.sqrt(np.mean(finite ** 2))) if finite.size else 0.0,

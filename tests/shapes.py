@@ -252,6 +252,13 @@ def quality_mesh(solid, max_length):
     return np.array([(p.x, p.y, p.z) for p in points], np.float64), np.array(facets, np.int32)
 
 
+def quality_layer(solid, max_length=2.0):
+    """(the feature layer of quality_mesh(solid, max_length), solid): an exact layer to edit."""
+    import idealize
+    V, F = quality_mesh(solid, max_length)
+    return idealize.idealize(idealize.Mesh(V, F)), solid
+
+
 def min_angles(V, F):
     """The smallest angle of each triangle, in degrees."""
     corners = [V[F[:, i]] for i in range(3)]

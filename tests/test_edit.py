@@ -10,9 +10,7 @@ from idealize import edit
 needs_freecad = pytest.mark.skipif(shapes.freecad() is None, reason="FreeCAD is not installed")
 
 
-def _layer(solid):
-    V, F = shapes.quality_mesh(solid, 2.0)
-    return idealize.idealize(idealize.Mesh(V, F)), solid
+_layer = shapes.quality_layer
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,8 @@
 // Bindings of the feature-based editing (native/src/edit).
 #include "conversions.h"
+#include "edit/delete_features.h"
 #include "edit/edit.h"
+#include "edit/feature_groups.h"
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
@@ -67,9 +69,82 @@ std::vector<FeatureRelation> relations_from(const std::vector<py::dict>& list) {
   return out;
 }
 
+std::vector<Surface> surfaces_from(const std::vector<std::string>& types, const std::vector<py::dict>& params) {
+  if (types.size() != params.size()) throw std::invalid_argument("one type and one parameter set per feature");
+  std::vector<Surface> surfaces;
+  for (size_t i = 0; i < types.size(); ++i) surfaces.push_back(surface_from_params(types[i], params[i]));
+  return surfaces;
+}
+
+TriangleMesh mesh_from(const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F) {
+  TriangleMesh mesh;
+  mesh.V = V;
+  mesh.F = F;
+  return mesh;
+}
+
+void bind_structure_edits(py::module_& m) {
+  m.def(
+      "feature_group",
+      [](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F, std::vector<int> labels,
+         const std::vector<std::string>& types, const std::vector<py::dict>& params, int seed) {
+        const std::vector<Surface> surfaces = surfaces_from(types, params);
+        const TriangleMesh mesh = mesh_from(V, F);
+        check_layer(mesh, labels, surfaces, {}, {});
+        FeatureGroup group;
+        {
+          py::gil_scoped_release release;
+          group = feature_group(mesh, labels, surfaces, seed);
+        }
+        py::dict d;
+        d["members"] = group.members;
+        d["hosts"] = group.hosts;
+        return d;
+      },
+      py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("seed"),
+      "The feature group of feature `seed` in a layer's idealized mesh (V, F oriented, labels, the features' "
+      "types and params): dict(members, hosts), sorted ids.");
+  m.def(
+      "delete_features",
+      [](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F, std::vector<int> labels,
+         const std::vector<std::string>& types, const std::vector<py::dict>& params,
+         const std::vector<py::dict>& adjacency, std::vector<int> features, double distance_tolerance, bool remesh,
+         std::vector<double> target_edge_lengths) {
+        const std::vector<Surface> surfaces = surfaces_from(types, params);
+        const TriangleMesh mesh = mesh_from(V, F);
+        const std::vector<FeatureAdjacency> graph = adjacency_from(adjacency);
+        EditOptions options;
+        options.distance_tolerance = distance_tolerance;
+        options.remesh = remesh;
+        options.target_edge_lengths = std::move(target_edge_lengths);
+        DeleteResult result;
+        {
+          py::gil_scoped_release release;
+          result = delete_features(mesh, labels, surfaces, graph, features, options);
+        }
+        py::dict d;
+        d["V"] = std::move(result.mesh.V);
+        d["F"] = std::move(result.mesh.F);
+        d["labels"] = py::array_t<int>(static_cast<py::ssize_t>(result.labels.size()), result.labels.data());
+        d["kept"] = result.kept;
+        d["hosts"] = result.hosts;
+        d["vertex_deviation"] = std::move(result.vertex_deviation);
+        d["target_edge_lengths"] = std::move(result.target_edge_lengths);
+        d["remeshing_problem"] = result.remeshing_problem;
+        return d;
+      },
+      py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("adjacency"),
+      py::arg("features"), py::kw_only(), py::arg("distance_tolerance") = 0.0, py::arg("remesh") = true,
+      py::arg("target_edge_lengths") = std::vector<double>(),
+      "Deletes `features` from a layer's idealized mesh, closing each gap on the plane or cylinder around it: "
+      "dict(V, F, labels (new ids), kept (old id per new id), hosts (new ids), vertex_deviation, "
+      "target_edge_lengths, remeshing_problem). Raises EditConflict when a gap has no single face to close it.");
+}
+
 }  // namespace
 
 void bind_edit(py::module_& m) {
+  bind_structure_edits(m);
   py::register_exception<EditConflict>(m, "EditConflict", PyExc_ValueError);
   m.def(
       "edit_features",

@@ -17,6 +17,8 @@ namespace {
 // The most steps an edit that turns triangles over is split into (see edit_features).
 constexpr int kMostSteps = 8;
 
+}  // namespace
+
 void check_layer(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
                  const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations) {
   const int n = static_cast<int>(surfaces.size());
@@ -50,6 +52,8 @@ Eigen::VectorXd vertex_deviation(const TriangleMesh& mesh, const std::vector<int
   return deviation;
 }
 
+namespace {
+
 // The smallest radius of curvature of a surface over the points `at` (infinite for a plane).
 double tightest_radius(const Surface& s, const TriangleMesh& mesh, const std::vector<int>& at) {
   switch (s.type) {
@@ -66,6 +70,8 @@ double tightest_radius(const Surface& s, const TriangleMesh& mesh, const std::ve
     default: return std::numeric_limits<double>::infinity();
   }
 }
+
+}  // namespace
 
 // Each feature's target edge length: the density it has, its own mean edge length, but no longer
 // than keeps its chords as close to a curved surface as its own edges keep them, or a quarter of
@@ -104,6 +110,8 @@ std::vector<double> remeshing_targets(const TriangleMesh& mesh, const std::vecto
   }
   return target;
 }
+
+namespace {
 
 EditResult edit_once(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
                      const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations,

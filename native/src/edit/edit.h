@@ -94,4 +94,23 @@ EditResult edit_features(const TriangleMesh& mesh, const std::vector<int>& label
                          const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations,
                          const FeatureEdit& edit, const EditOptions& options);
 
+// What the edits share.
+
+// Throws std::invalid_argument unless `labels` (#F, -1 for a triangle set aside) and the graph name
+// features of `surfaces` only.
+void check_layer(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                 const std::vector<FeatureAdjacency>& adjacency, const std::vector<FeatureRelation>& relations);
+
+// Per vertex: the distance from the nearest surface of the analytic features around it (NaN where
+// only freeform features touch it).
+Eigen::VectorXd vertex_deviation(const TriangleMesh& mesh, const std::vector<int>& labels,
+                                 const std::vector<Surface>& surfaces);
+
+// Per feature: the target edge length of its remeshing (EditOptions::target_edge_lengths): `given`
+// where positive, else its own mean edge length, no longer than keeps its chords as close to a
+// curved surface as its edges keep them now, or a quarter of `distance_tolerance`.
+std::vector<double> remeshing_targets(const TriangleMesh& mesh, const std::vector<int>& labels,
+                                      const std::vector<Surface>& surfaces, const std::vector<double>& given,
+                                      double distance_tolerance);
+
 }  // namespace idealize

@@ -1,0 +1,219 @@
+// Feature groups from the orientation of the feature regions' border loops (see feature_groups.h).
+#include "edit/feature_groups.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <utility>
+
+namespace idealize {
+
+namespace {
+
+Eigen::Vector3d face_normal_of(const TriangleMesh& mesh, int f) {
+  const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+  return (b - a).cross(c - a);  // area-weighted
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector2d> loop_chart(const TriangleMesh& mesh, const std::vector<int>& loop,
+                                        const std::vector<int>& region_faces, const Surface& surface, bool& winds) {
+  winds = false;
+  // A plane's (u, v) has u x v along the region's outward normal; a cylinder's chart has as its
+  // normal (the angle's direction x the axis) the radial direction, flipped when the region faces
+  // the axis (a hole's wall).
+  std::vector<Eigen::Vector2d> out;
+  Eigen::Vector3d e1, e2;
+  orthonormal_frame(surface.axis, e1, e2);
+  if (surface.type == SurfaceType::Plane) {
+    Eigen::Vector3d outward = Eigen::Vector3d::Zero();
+    for (int f : region_faces) outward += face_normal_of(mesh, f);
+    const double side = outward.dot(surface.axis) >= 0.0 ? 1.0 : -1.0;
+    for (int v : loop) {
+      const Eigen::Vector3d q = mesh.V.row(v).transpose() - surface.point;
+      out.emplace_back(q.dot(e1), side * q.dot(e2));  // (e1, ±e2) turns about ±axis
+    }
+    return out;
+  }
+  // Cylinder: whether the region faces away from the axis (a boss) or towards it (a hole's wall).
+  double facing = 0.0;
+  for (int f : region_faces) {
+    const Eigen::Vector3d centroid =
+        (mesh.V.row(mesh.F(f, 0)) + mesh.V.row(mesh.F(f, 1)) + mesh.V.row(mesh.F(f, 2))).transpose() / 3.0;
+    facing += face_normal_of(mesh, f).dot(axial_coordinates(surface.point, surface.axis, centroid).radial);
+  }
+  const double side = facing >= 0.0 ? 1.0 : -1.0;
+  auto wrapped = [](double step) { return step - 2.0 * M_PI * std::round(step / (2.0 * M_PI)); };  // the shorter way
+  double unwrapped = 0.0, previous = 0.0, turned = 0.0;
+  for (size_t i = 0; i <= loop.size(); ++i) {  // the last step closes the loop
+    const Eigen::Vector3d q = mesh.V.row(loop[i % loop.size()]).transpose() - surface.point;
+    const double a = std::atan2(q.dot(e2), q.dot(e1));
+    const double step = i == 0 ? a : wrapped(a - previous);
+    unwrapped += step;
+    if (i > 0) turned += step;
+    previous = a;
+    // (angle, height): the angle grows along e_angle = axis x radial, and e_angle x axis = radial.
+    if (i < loop.size()) out.emplace_back(surface.radius * unwrapped, side * q.dot(surface.axis));
+  }
+  // Closed up, the angle has turned by a whole number of turns: any but zero winds round the axis.
+  winds = std::abs(turned) > M_PI;
+  return out;
+}
+
+namespace {
+
+// The border loops of `feature`, whose faces are `faces` (border_loops); `used` (3 #F, zero) is
+// scratch, left zero.
+std::vector<BorderLoop> loops_of(const TriangleMesh& mesh, const MeshTopology& topology, const std::vector<int>& labels,
+                                 int feature, const std::vector<int>& faces, std::vector<char>& used) {
+  auto inside = [&](int f) { return f >= 0 && labels[f] == feature; };
+  // The border edges: edge c of a region face (opposite corner c, from F(f, c+1) to F(f, c+2) in
+  // the face's winding, so the region lies on its left) whose other side is not in the region.
+  auto on_border = [&](int f, int c) { return !inside(topology.face_neighbor(f, c)); };
+  // The border edge that follows edge c of face f: turning round its end vertex through the
+  // region's faces to the first edge out of it that is on the border. Where the region touches
+  // itself at a vertex, this keeps each wedge's loop apart, so that every loop is simple.
+  auto following = [&](int f, int c) {
+    const int b = mesh.F(f, (c + 2) % 3);
+    for (int turns = 0; turns < mesh.num_faces(); ++turns) {
+      const int k = (c + 1) % 3;  // the edge from b onwards in f
+      if (on_border(f, k)) return 3 * f + k;
+      const int g = topology.face_neighbor(f, k);
+      const int x = mesh.F(f, c);  // the edge b -> x in f is x -> b in g
+      int cg = 0;
+      while (cg < 3 && !(mesh.F(g, (cg + 1) % 3) == x && mesh.F(g, (cg + 2) % 3) == b)) ++cg;
+      if (cg == 3) return -1;  // inconsistently oriented: no further
+      f = g;
+      c = cg;
+    }
+    return -1;
+  };
+  std::vector<BorderLoop> loops;
+  for (int f0 : faces) {
+    for (int c0 = 0; c0 < 3; ++c0) {
+      if (!on_border(f0, c0) || used[3 * f0 + c0]) continue;
+      BorderLoop loop;
+      for (int e = 3 * f0 + c0; e >= 0 && !used[e]; e = following(e / 3, e % 3)) {
+        used[e] = 1;
+        const int f = e / 3, c = e % 3, g = topology.face_neighbor(f, c);
+        loop.vertices.push_back(mesh.F(f, (c + 1) % 3));
+        loop.faces.push_back(f);
+        loop.across.push_back(g >= 0 ? labels[g] : -1);
+        double rise = 0.0;
+        if (g >= 0) {
+          const int far = mesh.F(g, 0) + mesh.F(g, 1) + mesh.F(g, 2) - mesh.F(f, (c + 1) % 3) - mesh.F(f, (c + 2) % 3);
+          rise = face_normal_of(mesh, f).normalized().dot(mesh.V.row(far) - mesh.V.row(mesh.F(f, c)));
+        }
+        loop.rise.push_back(rise);
+      }
+      loops.push_back(std::move(loop));
+    }
+  }
+  for (int f : faces) used[3 * f] = used[3 * f + 1] = used[3 * f + 2] = 0;
+  return loops;
+}
+
+}  // namespace
+
+std::vector<BorderLoop> border_loops(const TriangleMesh& mesh, const std::vector<int>& labels, int feature) {
+  const MeshTopology topology(mesh);
+  std::vector<int> faces;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (labels[f] == feature) faces.push_back(f);
+  std::vector<char> used(3 * static_cast<size_t>(mesh.num_faces()), 0);
+  return loops_of(mesh, topology, labels, feature, faces, used);
+}
+
+bool BorderLoop::concave() const {
+  double sum = 0.0;
+  for (double r : rise) sum += r;
+  return sum > 0.0;
+}
+
+bool is_inner_loop(const TriangleMesh& mesh, const std::vector<int>& loop, const std::vector<int>& region_faces,
+                   const Surface& surface) {
+  if ((surface.type != SurfaceType::Plane && surface.type != SurfaceType::Cylinder) || loop.size() < 3) return false;
+  bool winds = false;
+  const std::vector<Eigen::Vector2d> p = loop_chart(mesh, loop, region_faces, surface, winds);
+  if (winds) return false;
+  double twice_area = 0.0;  // shoelace: positive counter-clockwise
+  for (size_t i = 0; i < p.size(); ++i) {
+    const Eigen::Vector2d &a = p[i], &b = p[(i + 1) % p.size()];
+    twice_area += a.x() * b.y() - a.y() * b.x();
+  }
+  return twice_area < 0.0;
+}
+
+FeatureGroup feature_group(const TriangleMesh& mesh, const std::vector<int>& labels,
+                           const std::vector<Surface>& surfaces, int seed) {
+  const int n = static_cast<int>(surfaces.size());
+  if (seed < 0 || seed >= n) throw std::invalid_argument("the layer has no feature " + std::to_string(seed));
+  std::vector<std::vector<int>> faces_of(n);
+  std::vector<double> area(n, 0.0);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (labels[f] >= 0 && labels[f] < n) {
+      faces_of[labels[f]].push_back(f);
+      area[labels[f]] += 0.5 * face_normal_of(mesh, f).norm();
+    }
+  const MeshTopology topology(mesh);
+  std::vector<char> used(3 * static_cast<size_t>(mesh.num_faces()), 0);
+  // hosted[h]: the features that h's region holds on an inner loop; floor[h]: h is sunk (every
+  // other loop of it concave) and has one inner loop, a convex one.
+  std::vector<std::set<int>> hosted(n), neighbours(n);
+  std::vector<char> floor(n, 0);
+  for (int h = 0; h < n; ++h) {
+    if (faces_of[h].empty()) continue;
+    int inner = 0, convex_inner = 0, outline = 0, concave_outline = 0;
+    for (const BorderLoop& loop : loops_of(mesh, topology, labels, h, faces_of[h], used)) {
+      neighbours[h].insert(loop.across.begin(), loop.across.end());
+      if (is_inner_loop(mesh, loop.vertices, faces_of[h], surfaces[h])) {
+        hosted[h].insert(loop.across.begin(), loop.across.end());
+        ++inner;
+        convex_inner += !loop.concave();
+      } else {
+        ++outline;
+        concave_outline += loop.concave();
+      }
+    }
+    neighbours[h].erase(-1);
+    floor[h] = inner == 1 && convex_inner == 1 && outline > 0 && concave_outline == outline;
+  }
+  std::set<int> members{seed}, hosts;
+  std::vector<int> open{seed};
+  auto join = [&](int x) {
+    members.insert(x);
+    hosts.erase(x);
+    open.push_back(x);
+  };
+  while (!open.empty()) {
+    while (!open.empty()) {
+      const int m = open.back();
+      open.pop_back();
+      for (int x : neighbours[m]) {
+        if (members.count(x)) continue;
+        if (hosted[x].count(m))
+          hosts.insert(x);
+        else
+          join(x);
+      }
+    }
+    for (int h : std::vector<int>(hosts.begin(), hosts.end()))
+      if (floor[h]) join(h);
+  }
+  double inside = 0.0, total = 0.0;
+  for (int f = 0; f < n; ++f) total += area[f];
+  for (int m : members) inside += area[m];
+  FeatureGroup group;
+  if (2.0 * inside >= total || hosts.empty()) {  // no group of its own: the seed alone
+    group.members = {seed};
+    for (int x : neighbours[seed])
+      if (hosted[x].count(seed)) group.hosts.push_back(x);
+    return group;
+  }
+  group.members.assign(members.begin(), members.end());
+  group.hosts.assign(hosts.begin(), hosts.end());
+  return group;
+}
+
+}  // namespace idealize
