@@ -51,12 +51,30 @@ def set_parameter(layer, feature_id, name, value, keep=None, remesh=True):
     return _edit(layer, [feature_id], parameter=names[name], value=float(value), keep=keep, remesh=remesh)
 
 
-def move(layer, feature_ids, translation, keep=None, remesh=True):
+def move(layer, feature_ids, translation, rotation=None, keep=None, remesh=True):
     """Moves features rigidly by `translation` (3 numbers): a hole across its face, a cone along
-    its axis. Tangent neighbours follow unless `keep` says otherwise."""
+    its axis.
+
+    A feature group that sits as an island on planes (:func:`feature_group`: a boss, a pocket, a
+    counterbored hole) travels as a decal: it is lifted off, its place closed, and placed again as
+    :func:`copy` places a copy (turned by `rotation` degrees about the host's normal first), so it
+    may go anywhere on its host, overlapping its old place or not; its features keep their ids. Other features move by deforming the mesh
+    around them, their tangent neighbours following unless `keep` says otherwise; `rotation` is
+    for groups only (see :func:`rotate` for the rest)."""
+    layer = as_feature_layer(layer)
+    ids = _ids(feature_ids)
+    if _island(layer, ids):
+        return _carried(layer, ids, translation, rotation, remesh)
+    if rotation is not None:
+        raise ValueError("features %s are not a group on planes: turn them with rotate()" % ids)
+    return _deformed(layer, ids, translation, keep, remesh)
+
+
+def _deformed(layer, ids, translation, keep, remesh):
+    """Features `ids` moved by `translation`, the mesh around them stretched and remeshed."""
     motion = np.eye(4)
     motion[:3, 3] = _vector(translation, "translation")
-    return _edit(layer, _ids(feature_ids), motion=motion, keep=keep, remesh=remesh)
+    return _edit(layer, ids, motion=motion, keep=keep, remesh=remesh)
 
 
 def rotate(layer, feature_ids, degrees, axis=None, center=None, keep=None, remesh=True):
@@ -102,6 +120,33 @@ def feature_group(layer, feature_id):
     return {"members": list(group["members"]), "hosts": list(group["hosts"])}
 
 
+def copy(layer, feature_ids, translation, rotation=None, remesh=True):
+    """Copies a feature group (see :func:`feature_group`) to another place on the planes it sits on,
+    as a decal: its triangles and surfaces are carried rigidly, the host opens a gap of the group's
+    outline there and the ring around it is triangulated and remeshed. `translation` (3 numbers)
+    must lie along the host planes; `rotation` (degrees) turns the copy counter-clockwise about
+    the host's outward normal through the group's centre first. The original stays; the copies get
+    new ids after the layer's (``layer.copies``: per id given, its copy's id).
+
+    A new place off the host, reaching its edge or another feature, or overlapping the group
+    raises :class:`EditConflict` naming them; so does a copy that would cut through the part (its
+    triangles crossing others), and the layer is left as it was."""
+    layer = as_feature_layer(layer)
+    ids = _ids(feature_ids)
+    for f in ids:
+        _feature(layer, f)
+    start = time.perf_counter()
+    result = _placed(native.copy_features, layer, ids, translation, rotation, remesh)
+    copies = list(result["copies"])
+    result["changed"] = [False] * len(result["params"])
+    out = _edited_layer(layer, result, _keep_flags(None), time.perf_counter() - start,
+                        _copied_graph(layer, ids, copies))
+    _refuse_crossings(out, "the copy")
+    out.changed = sorted(set(result["hosts"]) | set(copies))
+    out.copies = copies
+    return out
+
+
 def delete(layer, feature_ids, remesh=True):
     """Deletes features, usually a group of :func:`feature_group`: their triangles are lifted off and
     each gap is closed on the plane or cylinder around it, which is remeshed. The other features keep
@@ -123,10 +168,42 @@ def delete(layer, feature_ids, remesh=True):
     renumbered = {old: new for new, old in enumerate(kept)}
     result["params"] = [layer.features[old]["params"] for old in kept]
     result["changed"] = [False] * len(kept)
-    out = _edited_layer(layer, result, _keep_flags(None), time.perf_counter() - start, renumbered)
+    out = _edited_layer(layer, result, _keep_flags(None), time.perf_counter() - start,
+                        _renumbered_graph(layer, renumbered))
     out.changed = list(result["hosts"])
     out.renumbered = renumbered
     return out
+
+
+def _island(layer, ids):
+    """Whether features `ids` are a whole feature group on host planes."""
+    for f in ids:
+        _feature(layer, f)
+    group = feature_group(layer, ids[0])
+    return (sorted(set(ids)) == group["members"] and bool(group["hosts"])
+            and all(layer.features[h]["type"] == "plane" for h in group["hosts"]))
+
+
+def _carried(layer, ids, translation, rotation, remesh):
+    """The group `ids` lifted off and placed again at its new place (native.move_features)."""
+    start = time.perf_counter()
+    result = _placed(native.move_features, layer, ids, translation, rotation, remesh)
+    result["changed"] = [f in ids for f in range(len(layer.features))]
+    out = _edited_layer(layer, result, _keep_flags(None), time.perf_counter() - start)
+    _refuse_crossings(out, "the moved group")
+    out.changed = sorted(set(result["hosts"]) | set(ids))
+    return out
+
+
+def _placed(function, layer, ids, translation, rotation, remesh):
+    """native.copy_features or move_features of the group `ids` of `layer`."""
+    faces, labels = _kept_triangles(layer)
+    return function(
+        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64), faces, labels,
+        [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features],
+        list(layer.adjacency), ids, _vector(translation, "translation"),
+        np.radians(float(rotation or 0.0)), distance_tolerance=float(layer.distance_tolerance),
+        remesh=bool(remesh), target_edge_lengths=list(layer.edge_lengths or []))
 
 
 # The edits `apply` replays: {"op": name, ...the function's keyword arguments}.
@@ -245,12 +322,46 @@ def _renumbered_graph(layer, renumbered):
     return features, adjacency, relations
 
 
-def _edited_layer(layer, result, flags, seconds, renumbered=None):
+def _copied_graph(layer, ids, copies):
+    """The layer's features, adjacency and relations, then the copies of features `ids` (new ids
+    `copies`): each copy borders and relates to what its original does, copies standing for the
+    originals among the copied."""
+    copy_of = dict(zip(ids, copies))
+    features = list(layer.features)
+    for old, new in sorted(copy_of.items(), key=lambda item: item[1]):
+        f = dict(layer.features[old])
+        f["id"] = new
+        features.append(f)
+    adjacency = list(layer.adjacency)
+    for a in layer.adjacency:
+        if a["a"] in copy_of or a["b"] in copy_of:
+            a = dict(a)
+            a["a"], a["b"] = copy_of.get(a["a"], a["a"]), copy_of.get(a["b"], a["b"])
+            adjacency.append(a)
+    relations = list(layer.relations)
+    for r in layer.relations:
+        if any(m in copy_of for m in r["features"]):
+            r = dict(r)
+            r["features"] = [copy_of.get(m, m) for m in r["features"]]
+            relations.append(r)
+    return features, adjacency, relations
+
+
+def _refuse_crossings(layer, what):
+    """Raises EditConflict when the edited mesh's triangles cross: the edit cut through the part."""
+    crossing = native.self_intersections(np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64),
+                                         np.ascontiguousarray(layer.mesh.faces, dtype=np.int32))
+    if crossing:
+        raise EditConflict("%s would cut through the part (%d pairs of its triangles cross): place it where it "
+                           "does not reach another face" % (what, crossing))
+
+
+def _edited_layer(layer, result, flags, seconds, graph=None):
     V, F, labels = result["V"], result["F"], result["labels"]
-    if renumbered is None:
+    if graph is None:
         features_before, adjacency, relations_before = layer.features, list(layer.adjacency), layer.relations
     else:
-        features_before, adjacency, relations_before = _renumbered_graph(layer, renumbered)
+        features_before, adjacency, relations_before = graph
     changed = result["changed"]
     deviation = result["vertex_deviation"]
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]

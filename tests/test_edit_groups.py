@@ -146,3 +146,104 @@ def test_deleting_names_no_feature_or_all_is_an_error(boss):
         edit.delete(layer, [len(layer.features)])
     with pytest.raises(ValueError, match="every feature"):
         edit.delete(layer, list(range(len(layer.features))))
+
+
+def bossed_plate(centres, width=100.0):
+    """A width x 60 x 10 plate with round bosses (r 8, 15 high, filleted r 3 at the base) at `centres`."""
+    FreeCAD, Part, _ = shapes.freecad()
+    solid = Part.makeBox(width, 60, 10)
+    for x, y in centres:
+        solid = solid.fuse(Part.makeCylinder(8, 15, FreeCAD.Vector(x, y, 10)))
+    solid = solid.removeSplitter()
+    base = [e for e in solid.Edges if e.Curve.__class__.__name__ == "Circle" and abs(e.Vertexes[0].Point.z - 10) < 1e-6]
+    return solid.makeFillet(3, base)
+
+
+@pytest.fixture(scope="module")
+def wide_boss():
+    return _layer(bossed_plate([(30, 30)]))
+
+
+@pytest.fixture(scope="module")
+def pocketed():
+    """A 100 x 60 x 20 block with a 20 x 12 pocket 8 deep, its corners rounded (r 2), and a recess
+    30 x 30 x 15 in its bottom under the right half of the top."""
+    FreeCAD, Part, _ = shapes.freecad()
+    solid = Part.makeBox(100, 60, 20).cut(Part.makeBox(20, 12, 8, FreeCAD.Vector(15, 24, 12)))
+    corners = [e for e in solid.Edges if e.Curve.__class__.__name__ == "Line" and min(v.Point.z for v in e.Vertexes) > 11
+               and abs(e.Vertexes[0].Point.z - e.Vertexes[1].Point.z) > 1]
+    solid = solid.makeFillet(2, corners)
+    return _layer(solid.cut(Part.makeBox(30, 30, 15, FreeCAD.Vector(60, 15, 0))))
+
+
+def test_a_copied_boss_is_the_boss_moved_and_the_rest_stays(wide_boss):
+    layer, _ = wide_boss
+    group = edit.feature_group(layer, of_type(layer, "cylinder", radius=8.0)[0])
+    after = edit.copy(layer, group["members"], (40, 0, 0))
+    made = idealize.make_solid(after)
+    assert made.solid and not made.problems and made.faces == 12
+    assert made.volume == pytest.approx(bossed_plate([(30, 30), (70, 30)]).Volume, rel=1e-6)
+    for old in range(len(layer.features)):
+        assert after.features[old]["params"] == layer.features[old]["params"]
+    for old, new in zip(group["members"], after.copies):
+        kind, before, copied = layer.features[old]["type"], layer.features[old]["params"], after.features[new]["params"]
+        assert after.features[new]["type"] == kind
+        anchor = "center" if kind == "torus" else "point"
+        assert np.allclose(np.asarray(copied[anchor]) - before[anchor], [40, 0, 0], atol=1e-9)
+        for key in ("radius", "minor"):
+            if key in before:
+                assert copied[key] == pytest.approx(before[key], abs=1e-12)
+    check = idealize.segment(after.mesh, self_intersections=True).mesh_check
+    assert check["boundary_edges"] == 0 and check["nonmanifold_edges"] == 0 and check["self_intersecting_pairs"] == 0
+    hosts = np.isin(after.labels, group["hosts"])
+    assert np.mean(shapes.min_angles(after.idealized_vertices, after.mesh.faces)[hosts] >= 20.0) >= 0.99
+
+
+@pytest.mark.parametrize("translation", [(45, 10, 0), (3, -2, 0)])  # far, and over its own place
+def test_a_moved_boss_keeps_its_ids_and_lands_where_asked(wide_boss, translation):
+    layer, _ = wide_boss
+    group = edit.feature_group(layer, of_type(layer, "cylinder", radius=8.0)[0])
+    after = edit.move(layer, group["members"], translation)
+    assert len(after.features) == len(layer.features)
+    wall, = of_type(after, "cylinder", radius=8.0)
+    assert wall in group["members"]
+    centre = np.add([30, 30], translation[:2])
+    assert np.allclose(np.asarray(after.features[wall]["params"]["point"])[:2], centre, atol=1e-9)
+    for f in range(len(layer.features)):
+        if f not in group["members"]:
+            assert after.features[f]["params"] == layer.features[f]["params"]
+    made = idealize.make_solid(after)
+    assert made.solid and made.faces == 9
+    assert made.volume == pytest.approx(bossed_plate([tuple(centre)]).Volume, rel=1e-6)
+    hosts = np.isin(after.labels, group["hosts"])
+    assert np.mean(shapes.min_angles(after.idealized_vertices, after.mesh.faces)[hosts] >= 20.0) >= 0.99
+
+
+@pytest.mark.parametrize("translation, conflict", [
+    ((62, 0, 0), "reaches feature"),       # over the plate's edge
+    ((10, 0, 0), None),                    # overlaps its own place: copy refuses
+    ((0, 0, 2), "off the plane"),          # off its host
+])
+def test_a_copy_that_cannot_take_its_place_is_refused_and_changes_nothing(wide_boss, translation, conflict):
+    layer, _ = wide_boss
+    group = edit.feature_group(layer, of_type(layer, "cylinder", radius=8.0)[0])
+    labels = copy.deepcopy(layer.labels)
+    with pytest.raises(edit.EditConflict, match=conflict or "own place"):
+        edit.copy(layer, group["members"], translation)
+    assert np.array_equal(labels, layer.labels)
+
+
+def test_a_pocket_turns_and_a_copy_over_the_recess_would_break_through(pocketed):
+    layer, solid = pocketed
+    floor, = plane_at_height(layer, 12.0)
+    group = edit.feature_group(layer, floor)
+    assert len(group["members"]) == 9  # floor, four walls, four corner fillets
+    turned = edit.move(layer, group["members"], (0, 0, 0), rotation=90)
+    made = idealize.make_solid(turned)
+    assert made.solid and made.faces == len(layer.features)
+    assert made.volume == pytest.approx(solid.Volume, rel=1e-6)
+    walls = [f for f in group["members"] if turned.features[f]["type"] == "plane" and f != floor]
+    normals = {tuple(np.round(np.abs(layer.features[f]["params"]["normal"]), 9)) for f in walls}
+    assert {tuple(np.round(np.abs(turned.features[f]["params"]["normal"]), 9)) for f in walls} == normals
+    with pytest.raises(edit.EditConflict, match="cut through the part"):
+        edit.copy(layer, group["members"], (50, 0, 0))

@@ -1,8 +1,10 @@
 // Bindings of the feature-based editing (native/src/edit).
 #include "conversions.h"
+#include "edit/copy_features.h"
 #include "edit/delete_features.h"
 #include "edit/edit.h"
 #include "edit/feature_groups.h"
+#include "prepare/remesh_cgal.h"
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
@@ -10,6 +12,7 @@
 
 #include <map>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace idealize {
@@ -83,7 +86,24 @@ TriangleMesh mesh_from(const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref
   return mesh;
 }
 
+EditOptions structure_options(double distance_tolerance, bool remesh, std::vector<double> target_edge_lengths) {
+  EditOptions options;
+  options.distance_tolerance = distance_tolerance;
+  options.remesh = remesh;
+  options.target_edge_lengths = std::move(target_edge_lengths);
+  return options;
+}
+
 void bind_structure_edits(py::module_& m) {
+  m.def(
+      "self_intersections",
+      [](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F, long long max_pairs) {
+        const TriangleMesh mesh = mesh_from(V, F);
+        py::gil_scoped_release release;
+        return count_self_intersections(mesh, max_pairs);
+      },
+      py::arg("V"), py::arg("F"), py::arg("max_pairs") = 1000,
+      "The number of pairs of triangles that cross (CGAL), counted up to max_pairs; V, F a prepared mesh.");
   m.def(
       "feature_group",
       [](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F, std::vector<int> labels,
@@ -113,10 +133,7 @@ void bind_structure_edits(py::module_& m) {
         const std::vector<Surface> surfaces = surfaces_from(types, params);
         const TriangleMesh mesh = mesh_from(V, F);
         const std::vector<FeatureAdjacency> graph = adjacency_from(adjacency);
-        EditOptions options;
-        options.distance_tolerance = distance_tolerance;
-        options.remesh = remesh;
-        options.target_edge_lengths = std::move(target_edge_lengths);
+        const EditOptions options = structure_options(distance_tolerance, remesh, std::move(target_edge_lengths));
         DeleteResult result;
         {
           py::gil_scoped_release release;
@@ -139,6 +156,57 @@ void bind_structure_edits(py::module_& m) {
       "Deletes `features` from a layer's idealized mesh, closing each gap on the plane or cylinder around it: "
       "dict(V, F, labels (new ids), kept (old id per new id), hosts (new ids), vertex_deviation, "
       "target_edge_lengths, remeshing_problem). Raises EditConflict when a gap has no single face to close it.");
+
+  using Placing = CopyResult (*)(const TriangleMesh&, const std::vector<int>&, const std::vector<Surface>&,
+                                 const std::vector<FeatureAdjacency>&, const std::vector<int>&, const Placement&,
+                                 const EditOptions&);
+  auto placing = [](Placing function) {
+    return [function](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F,
+                      std::vector<int> labels, const std::vector<std::string>& types,
+                      const std::vector<py::dict>& params, const std::vector<py::dict>& adjacency,
+                      std::vector<int> features, const Eigen::Vector3d& translation, double rotation,
+                      double distance_tolerance, bool remesh, std::vector<double> target_edge_lengths) {
+      const std::vector<Surface> surfaces = surfaces_from(types, params);
+      const TriangleMesh mesh = mesh_from(V, F);
+      const std::vector<FeatureAdjacency> graph = adjacency_from(adjacency);
+      const Placement placement{translation, rotation};
+      const EditOptions options = structure_options(distance_tolerance, remesh, std::move(target_edge_lengths));
+      CopyResult result;
+      {
+        py::gil_scoped_release release;
+        result = function(mesh, labels, surfaces, graph, features, placement, options);
+      }
+      py::list new_params;
+      for (const Surface& s : result.surfaces) new_params.append(surface_params(s));
+      py::dict d;
+      d["V"] = std::move(result.mesh.V);
+      d["F"] = std::move(result.mesh.F);
+      d["labels"] = py::array_t<int>(static_cast<py::ssize_t>(result.labels.size()), result.labels.data());
+      d["params"] = new_params;
+      d["copies"] = result.copies;
+      d["hosts"] = result.hosts;
+      d["vertex_deviation"] = std::move(result.vertex_deviation);
+      d["target_edge_lengths"] = std::move(result.target_edge_lengths);
+      d["remeshing_problem"] = result.remeshing_problem;
+      return d;
+    };
+  };
+  for (const auto& [name, function, doc] : {
+           std::tuple<const char*, Placing, const char*>{
+               "copy_features", &copy_features,
+               "Copies `features` (a group on host planes), turned by `rotation` (radians) about its first host's "
+               "normal through its centroid and moved by `translation` (along the hosts): dict(V, F, labels, params "
+               "(every feature's, the copies' appended), copies (new id per feature given), hosts, vertex_deviation, "
+               "target_edge_lengths, remeshing_problem). Raises EditConflict naming what the new place conflicts "
+               "with."},
+           std::tuple<const char*, Placing, const char*>{
+               "move_features", &move_features,
+               "Moves `features` (a group on host planes) as copy_features would copy them, deleting them from "
+               "their old place first; the features keep their ids (copies: the ids given)."}})
+    m.def(name, placing(function), py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"),
+          py::arg("params"), py::arg("adjacency"), py::arg("features"), py::arg("translation"),
+          py::arg("rotation") = 0.0, py::kw_only(), py::arg("distance_tolerance") = 0.0, py::arg("remesh") = true,
+          py::arg("target_edge_lengths") = std::vector<double>(), doc);
 }
 
 }  // namespace

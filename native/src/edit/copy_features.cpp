@@ -1,0 +1,338 @@
+// Copying a feature group as a decal onto another place of its host planes (see copy_features.h).
+#include "edit/copy_features.h"
+
+#include "edit/contacts.h"
+#include "edit/delete_features.h"
+#include "edit/feature_groups.h"
+#include "edit/gaps.h"
+#include "edit/remesh_adaptive.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <set>
+#include <string>
+
+namespace idealize {
+
+namespace {
+
+using Polygon = std::vector<Eigen::Vector2d>;
+
+double orientation(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+}
+
+// Whether segments ab and cd meet (touching counts).
+bool segments_meet(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c, const Eigen::Vector2d& d) {
+  const double d1 = orientation(c, d, a), d2 = orientation(c, d, b), d3 = orientation(a, b, c), d4 = orientation(a, b, d);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
+  auto on = [](const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Eigen::Vector2d& r, double o) {
+    return o == 0.0 && std::min(p.x(), q.x()) <= r.x() && r.x() <= std::max(p.x(), q.x()) &&
+           std::min(p.y(), q.y()) <= r.y() && r.y() <= std::max(p.y(), q.y());
+  };
+  return on(c, d, a, d1) || on(c, d, b, d2) || on(a, b, c, d3) || on(a, b, d, d4);
+}
+
+bool inside(const Polygon& polygon, const Eigen::Vector2d& p) {  // crossing number
+  bool in = false;
+  for (size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+    const Eigen::Vector2d &a = polygon[i], &b = polygon[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
+      in = !in;
+  }
+  return in;
+}
+
+// Whether a triangle (its corners in the chart) and a polygon overlap.
+bool overlaps(const std::array<Eigen::Vector2d, 3>& t, const Polygon& polygon) {
+  for (const Eigen::Vector2d& p : t)
+    if (inside(polygon, p)) return true;
+  const Polygon triangle(t.begin(), t.end());
+  if (inside(triangle, polygon.front())) return true;
+  for (size_t i = 0; i < polygon.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      if (segments_meet(polygon[i], polygon[(i + 1) % polygon.size()], t[k], t[(k + 1) % 3])) return true;
+  return false;
+}
+
+// Throws EditConflict unless `motion` keeps plane `host` in place, its outside too.
+void check_keeps_plane(const Surface& host, int id, const Eigen::Isometry3d& motion, double diagonal) {
+  // Rounding of a translation given along the plane: a billionth of the part, and of a radian.
+  const double off = std::abs((motion * host.point - host.point).dot(host.axis));
+  if ((motion.linear() * host.axis - host.axis).norm() > 1e-9 || off > 1e-9 * diagonal)
+    throw EditConflict("the new place is off the plane of feature " + std::to_string(id) +
+                       ": translate along that plane and turn about its normal only");
+}
+
+// The host faces (labelled `host` in `labels`) that the new outline `outline` (chart of the host)
+// covers, and one ring of host faces around them, so that the gap's border keeps a triangle's
+// width from the outline. `chart_of_vertex`: every vertex's point in the host's chart.
+std::vector<int> faces_to_open(const TriangleMesh& mesh, const std::vector<int>& labels, int host,
+                               const std::vector<int>& host_faces, const Polygon& outline,
+                               const std::vector<Eigen::Vector2d>& chart_of_vertex, const MeshTopology& topology) {
+  std::set<int> covered;
+  for (int f : host_faces) {
+    const std::array<Eigen::Vector2d, 3> t{chart_of_vertex[mesh.F(f, 0)], chart_of_vertex[mesh.F(f, 1)],
+                                           chart_of_vertex[mesh.F(f, 2)]};
+    if (overlaps(t, outline)) covered.insert(f);
+  }
+  std::set<int> opened = covered;
+  for (int f : covered)
+    for (int c = 0; c < 3; ++c) {
+      const int v = mesh.F(f, c);
+      for (const int* g = topology.vertex_faces_begin(v); g != topology.vertex_faces_end(v); ++g)
+        if (labels[*g] == host) opened.insert(*g);
+    }
+  return {opened.begin(), opened.end()};
+}
+
+// The rigid motion of `placement` for the group labelled `group`, whose first host is `host`.
+Eigen::Isometry3d placement_motion(const TriangleMesh& mesh, const std::vector<int>& labels, int group,
+                                   const std::vector<Surface>& surfaces, int host, const Placement& placement) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero(), outward = Eigen::Vector3d::Zero();
+  std::set<int> vertices;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (labels[f] == group)
+      for (int c = 0; c < 3; ++c) vertices.insert(mesh.F(f, c));
+    if (labels[f] == host) {
+      const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+      outward += (b - a).cross(c - a);
+    }
+  }
+  for (int v : vertices) centroid += mesh.V.row(v).transpose();
+  centroid /= static_cast<double>(std::max<size_t>(vertices.size(), 1));
+  const Eigen::Vector3d normal = outward.dot(surfaces[host].axis) >= 0.0 ? surfaces[host].axis : -surfaces[host].axis;
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  motion.linear() = Eigen::AngleAxisd(placement.rotation, normal).toRotationMatrix();
+  motion.translation() = centroid - motion.linear() * centroid + placement.translation;
+  return motion;
+}
+
+// A group lifted off its mesh and carried to its new place: what a copy or a move places.
+struct Decal {
+  TriangleMesh mesh;                    // the group's triangles (host rim triangles too), moved
+  std::vector<int> labels;              // per decal face: its feature in the layer
+  std::vector<std::vector<int>> loops;  // per border loop: decal vertices in order, the group on the left
+  std::vector<int> hosts;               // per loop: its host plane
+  std::vector<char> member;             // per feature of the layer: in the group
+  Eigen::Isometry3d motion;             // what carried it
+};
+
+Decal lift_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                 const std::vector<int>& features, const Placement& placement) {
+  const int n = static_cast<int>(surfaces.size());
+  Decal decal;
+  decal.member.assign(n, 0);
+  for (int f : features) {
+    if (f < 0 || f >= n) throw std::invalid_argument("the layer has no feature " + std::to_string(f));
+    decal.member[f] = 1;
+  }
+  if (features.empty()) throw std::invalid_argument("no feature to copy or move");
+  // The group (label n), its loops and their hosts, as for a deletion.
+  std::vector<int> group_labels = labels;
+  for (int& l : group_labels)
+    if (l >= 0 && decal.member[l]) l = n;
+  take_rim_triangles(mesh, n, group_labels);
+  const std::vector<BorderLoop> loops = border_loops(mesh, group_labels, n);
+  if (loops.empty()) throw std::invalid_argument("the features to copy or move have no triangles");
+  decal.hosts = gap_hosts(mesh, group_labels, n, surfaces, loops);
+  const double diagonal = bounding_box_diagonal(mesh);
+  decal.motion = placement_motion(mesh, group_labels, n, surfaces, decal.hosts.front(), placement);
+  for (int h : decal.hosts) {
+    if (surfaces[h].type != SurfaceType::Plane)
+      throw EditConflict("the group sits on feature " + std::to_string(h) + ", a " + surface_type_name(surfaces[h].type) +
+                         ": a group is copied and moved on planes only");
+    check_keeps_plane(surfaces[h], h, decal.motion, diagonal);
+  }
+  std::vector<int> index(mesh.num_vertices(), -1);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::array<int, 3>> faces;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (group_labels[f] != n) continue;
+    std::array<int, 3> t;
+    for (int c = 0; c < 3; ++c) {
+      int& v = index[mesh.F(f, c)];
+      if (v < 0) {
+        v = static_cast<int>(points.size());
+        points.push_back(decal.motion * Eigen::Vector3d(mesh.V.row(mesh.F(f, c)).transpose()));
+      }
+      t[c] = v;
+    }
+    faces.push_back(t);
+    decal.labels.push_back(labels[f]);
+  }
+  decal.mesh.V.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (size_t v = 0; v < points.size(); ++v) decal.mesh.V.row(static_cast<Eigen::Index>(v)) = points[v];
+  decal.mesh.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f)
+    for (int c = 0; c < 3; ++c) decal.mesh.F(static_cast<Eigen::Index>(f), c) = faces[f][c];
+  for (const BorderLoop& loop : loops) {
+    decal.loops.emplace_back();
+    for (int v : loop.vertices) decal.loops.back().push_back(index[v]);
+  }
+  return decal;
+}
+
+// `mesh` with `decal` placed: for each loop, the host's faces under its outline and a ring around
+// them open, and the ring between the gap's border and the outline is triangulated. Decal faces
+// take the label label_of(their feature); `own` marks the features whose place the decal must
+// not reach (the original of a copy).
+void place_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                 const Decal& decal, const std::vector<int>& label_of, const std::vector<char>& own,
+                 TriangleMesh& out, std::vector<int>& out_labels) {
+  TriangleMesh placed;
+  placed.F = mesh.F;
+  placed.V.resize(mesh.num_vertices() + decal.mesh.num_vertices(), 3);
+  placed.V << mesh.V, decal.mesh.V;
+  const int shift = mesh.num_vertices();
+  const MeshTopology topology(mesh);
+  const int n = static_cast<int>(surfaces.size());
+  std::vector<std::vector<int>> host_faces(n);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (labels[f] >= 0) host_faces[labels[f]].push_back(f);
+  std::vector<int> all(placed.num_vertices());
+  for (int v = 0; v < placed.num_vertices(); ++v) all[v] = v;
+  std::vector<char> removed(mesh.num_faces(), 0);
+  std::vector<std::array<int, 3>> faces;
+  for (size_t i = 0; i < decal.loops.size(); ++i) {
+    const int h = decal.hosts[i];
+    bool winds = false;
+    std::vector<int> outline_ids;
+    for (int v : decal.loops[i]) outline_ids.push_back(shift + v);
+    const Polygon outline = loop_chart(placed, outline_ids, host_faces[h], surfaces[h], winds);
+    const Polygon chart_of_vertex = loop_chart(placed, all, host_faces[h], surfaces[h], winds);
+    const std::vector<int> open = faces_to_open(mesh, labels, h, host_faces[h], outline, chart_of_vertex, topology);
+    if (open.empty())
+      throw EditConflict("the group's new place is not on feature " + std::to_string(h) + ": it would leave that face");
+    std::vector<int> gap_labels = labels;
+    for (int f : open) {
+      if (removed[f]) throw EditConflict("the group's outlines on feature " + std::to_string(h) + " overlap each other");
+      removed[f] = 1;
+      gap_labels[f] = n;
+    }
+    const std::vector<BorderLoop> gap = border_loops(mesh, gap_labels, n);
+    std::set<int> along;
+    for (const BorderLoop& g : gap) along.insert(g.across.begin(), g.across.end());
+    along.erase(h);
+    if (!along.empty()) {
+      const int x = *along.begin();
+      throw EditConflict("the group's new place on feature " + std::to_string(h) + " reaches " +
+                         (x >= 0 && own[x] ? std::string("the group's own place") : "feature " + std::to_string(x)) +
+                         ": place it further from that face's edges and from other features");
+    }
+    if (gap.size() != 1)
+      throw EditConflict("the group's new place on feature " + std::to_string(h) + " surrounds another feature");
+    const Polygon outer = loop_chart(placed, gap[0].vertices, host_faces[h], surfaces[h], winds);
+    const Polygon inner(outline.rbegin(), outline.rend());
+    for (const std::array<int, 3>& t : fill_ring(outer, inner)) {
+      std::array<int, 3> face;
+      for (int k = 0; k < 3; ++k)
+        face[k] = t[k] < static_cast<int>(outer.size())
+                      ? gap[0].vertices[t[k]]
+                      : outline_ids[outline_ids.size() - 1 - (t[k] - outer.size())];
+      faces.push_back(face);
+      out_labels.push_back(h);
+    }
+  }
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (!removed[f]) {
+      faces.push_back({mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)});
+      out_labels.push_back(labels[f]);
+    }
+  for (int f = 0; f < decal.mesh.num_faces(); ++f) {
+    faces.push_back({shift + decal.mesh.F(f, 0), shift + decal.mesh.F(f, 1), shift + decal.mesh.F(f, 2)});
+    out_labels.push_back(label_of[decal.labels[f]]);
+  }
+  if (is_closed(mesh)) check_closed(faces);
+  out = compact_mesh(placed.V, faces);
+}
+
+// The hosts remeshed at their targets (result.target_edge_lengths), the deviations measured.
+void remesh_hosts(const std::vector<FeatureAdjacency>& adjacency, const std::vector<int>& label_of,
+                  const EditOptions& options, CopyResult& result) {
+  result.vertex_deviation = Eigen::VectorXd();
+  if (options.remesh) {
+    std::vector<double> targets(result.surfaces.size(), 0.0);
+    for (int h : result.hosts) targets[h] = result.target_edge_lengths[h];
+    std::set<std::pair<int, int>> g1;
+    auto add = [&](int a, int b) { g1.insert({std::min(a, b), std::max(a, b)}); };
+    for (const FeatureAdjacency& a : adjacency)
+      if (a.continuity == Continuity::G1) {
+        add(a.a, a.b);
+        add(label_of[a.a], label_of[a.b]);
+      }
+    try {
+      RemeshedLayer remeshed = remesh_adaptive(result.mesh, result.labels, targets, result.surfaces, g1,
+                                               options.remesh_iterations);
+      result.mesh = std::move(remeshed.mesh);
+      result.labels = std::move(remeshed.labels);
+    } catch (const std::exception& e) {
+      result.remeshing_problem = e.what();
+    }
+  }
+  result.vertex_deviation = vertex_deviation(result.mesh, result.labels, result.surfaces);
+}
+
+}  // namespace
+
+CopyResult copy_features(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                         const std::vector<FeatureAdjacency>& adjacency, const std::vector<int>& features,
+                         const Placement& placement, const EditOptions& options) {
+  check_layer(mesh, labels, surfaces, adjacency, {});
+  const Decal decal = lift_decal(mesh, labels, surfaces, features, placement);
+  const int n = static_cast<int>(surfaces.size());
+  CopyResult result;
+  result.surfaces = surfaces;
+  const std::vector<double> before =
+      remeshing_targets(mesh, labels, surfaces, options.target_edge_lengths, options.distance_tolerance);
+  result.target_edge_lengths = before;
+  std::vector<int> label_of(n);
+  for (int f = 0; f < n; ++f) {
+    label_of[f] = f;
+    if (!decal.member[f]) continue;
+    label_of[f] = static_cast<int>(result.surfaces.size());
+    result.surfaces.push_back(moved(surfaces[f], decal.motion));
+    result.target_edge_lengths.push_back(before[f]);
+  }
+  for (int f : features) result.copies.push_back(label_of[f]);
+  place_decal(mesh, labels, surfaces, decal, label_of, decal.member, result.mesh, result.labels);
+  result.hosts = decal.hosts;
+  std::sort(result.hosts.begin(), result.hosts.end());
+  result.hosts.erase(std::unique(result.hosts.begin(), result.hosts.end()), result.hosts.end());
+  remesh_hosts(adjacency, label_of, options, result);
+  return result;
+}
+
+CopyResult move_features(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
+                         const std::vector<FeatureAdjacency>& adjacency, const std::vector<int>& features,
+                         const Placement& placement, const EditOptions& options) {
+  check_layer(mesh, labels, surfaces, adjacency, {});
+  const Decal decal = lift_decal(mesh, labels, surfaces, features, placement);
+  const int n = static_cast<int>(surfaces.size());
+  // The group deleted (its gaps closed, not yet remeshed), under the layer's ids again.
+  EditOptions unremeshed = options;
+  unremeshed.remesh = false;
+  const DeleteResult gone = delete_features(mesh, labels, surfaces, adjacency, features, unremeshed);
+  std::vector<int> without = gone.labels;
+  for (int& l : without)
+    if (l >= 0) l = gone.kept[l];
+  CopyResult result;
+  result.surfaces = surfaces;
+  std::vector<int> same(n);
+  for (int f = 0; f < n; ++f) {
+    same[f] = f;
+    if (decal.member[f]) result.surfaces[f] = moved(surfaces[f], decal.motion);
+  }
+  result.copies = features;
+  place_decal(gone.mesh, without, surfaces, decal, same, std::vector<char>(n, 0), result.mesh, result.labels);
+  result.hosts = decal.hosts;
+  std::sort(result.hosts.begin(), result.hosts.end());
+  result.hosts.erase(std::unique(result.hosts.begin(), result.hosts.end()), result.hosts.end());
+  result.target_edge_lengths =
+      remeshing_targets(mesh, labels, surfaces, options.target_edge_lengths, options.distance_tolerance);
+  remesh_hosts(adjacency, same, options, result);
+  return result;
+}
+
+}  // namespace idealize

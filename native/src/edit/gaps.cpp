@@ -1,0 +1,244 @@
+// Cutting and closing gaps in host faces (see gaps.h).
+#include "edit/gaps.h"
+
+#include "edit/edit.h"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <list>
+#include <map>
+#include <set>
+#include <string>
+
+namespace idealize {
+
+namespace {
+
+double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+}
+
+std::string feature_list(const std::set<int>& features) {
+  std::string s;
+  for (int f : features) s += (s.empty() ? "" : ", ") + std::to_string(f);
+  return s;
+}
+
+}  // namespace
+
+void take_rim_triangles(const TriangleMesh& mesh, int group, std::vector<int>& group_labels) {
+  const MeshTopology topology(mesh);
+  for (bool grew = true; grew;) {
+    grew = false;
+    std::vector<char> on_border(mesh.num_vertices(), 0);
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(f, c);
+        if (group_labels[f] == group && g >= 0 && group_labels[g] != group)
+          on_border[mesh.F(f, (c + 1) % 3)] = on_border[mesh.F(f, (c + 2) % 3)] = 1;
+      }
+    for (int f = 0; f < mesh.num_faces(); ++f) {
+      if (group_labels[f] == group || group_labels[f] < 0) continue;
+      bool touches = false, rim = true;
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(f, c);
+        touches |= g >= 0 && group_labels[g] == group;
+        rim &= on_border[mesh.F(f, c)] != 0;
+      }
+      if (touches && rim) {
+        group_labels[f] = group;
+        grew = true;
+      }
+    }
+  }
+}
+
+std::vector<int> gap_hosts(const TriangleMesh& mesh, const std::vector<int>& group_labels, int group,
+                           const std::vector<Surface>& surfaces, const std::vector<BorderLoop>& loops) {
+  std::vector<std::vector<int>> faces_of(surfaces.size());
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (group_labels[f] >= 0 && group_labels[f] != group) faces_of[group_labels[f]].push_back(f);
+  std::vector<int> hosts;
+  for (const BorderLoop& loop : loops) {
+    const std::set<int> across(loop.across.begin(), loop.across.end());
+    if (across.count(-1))
+      throw EditConflict("the group reaches the mesh's open border or a triangle set aside: there is no face to close it");
+    if (across.size() > 1)
+      throw EditConflict("the group's border runs along features " + feature_list(across) +
+                         ", not around one face: only a group that one plane or cylinder surrounds can be deleted");
+    const int host = *across.begin();
+    const Surface& s = surfaces[host];
+    if (s.type != SurfaceType::Plane && s.type != SurfaceType::Cylinder)
+      throw EditConflict("the group sits on feature " + std::to_string(host) + ", a " + surface_type_name(s.type) +
+                         ": only a gap in a plane or a cylinder can be closed");
+    // The host walks the loop the other way round, with itself on the left.
+    const std::vector<int> reversed(loop.vertices.rbegin(), loop.vertices.rend());
+    if (!is_inner_loop(mesh, reversed, faces_of[host], s))
+      throw EditConflict("the group is not an island in feature " + std::to_string(host) +
+                         ": its border there is not a hole in that face (it would take the face's outline with it)");
+    hosts.push_back(host);
+  }
+  return hosts;
+}
+
+// Ear clipping: each ear is the convex corner whose triangle
+// holds no other corner; among the ears, the one of the largest smallest angle goes first, which
+// keeps the fan from slivering before the remeshing. O(n^3) on an n-gon: gaps are loops of tens to
+// a few hundred edges.
+std::vector<std::array<int, 3>> close_polygon(const std::vector<Eigen::Vector2d>& p) {
+  std::vector<int> ring(p.size());
+  for (size_t i = 0; i < p.size(); ++i) ring[i] = static_cast<int>(i);
+  std::vector<std::array<int, 3>> out;
+  auto smallest_angle = [&](int a, int b, int c) {
+    const Eigen::Vector2d u = p[b] - p[a], v = p[c] - p[b], w = p[a] - p[c];
+    auto angle = [](const Eigen::Vector2d& x, const Eigen::Vector2d& y) {
+      return std::atan2(std::abs(x.x() * y.y() - x.y() * y.x()), -x.dot(y));
+    };
+    return std::min({angle(w, u), angle(u, v), angle(v, w)});
+  };
+  while (ring.size() > 3) {
+    const size_t n = ring.size();
+    int best = -1;
+    double best_angle = -1.0;
+    for (size_t i = 0; i < n; ++i) {
+      const int a = ring[(i + n - 1) % n], b = ring[i], c = ring[(i + 1) % n];
+      if (cross2(p[a], p[b], p[c]) <= 0.0) continue;  // reflex or flat: not an ear
+      bool empty = true;
+      for (size_t j = 0; j < n && empty; ++j) {
+        const int x = ring[j];
+        if (x == a || x == b || x == c) continue;
+        empty = !(cross2(p[a], p[b], p[x]) >= 0.0 && cross2(p[b], p[c], p[x]) >= 0.0 && cross2(p[c], p[a], p[x]) >= 0.0);
+      }
+      if (!empty) continue;
+      const double angle = smallest_angle(a, b, c);
+      if (angle > best_angle) {
+        best_angle = angle;
+        best = static_cast<int>(i);
+      }
+    }
+    // A polygon has two ears (Meisters); none found means rounding on nearly flat corners: the
+    // most convex corner goes.
+    if (best < 0) {
+      double most = -std::numeric_limits<double>::infinity();
+      for (size_t i = 0; i < n; ++i) {
+        const double turn = cross2(p[ring[(i + n - 1) % n]], p[ring[i]], p[ring[(i + 1) % n]]);
+        if (turn > most) {
+          most = turn;
+          best = static_cast<int>(i);
+        }
+      }
+    }
+    out.push_back({ring[(best + n - 1) % n], ring[best], ring[(best + 1) % n]});
+    ring.erase(ring.begin() + best);
+  }
+  out.push_back({ring[0], ring[1], ring[2]});
+  return out;
+}
+
+
+namespace {
+
+// A constrained Delaunay triangulation whose faces know how deep they lie inside the constraints
+// (CGAL's polygon triangulation example, "mark_domains").
+struct Nesting {
+  int level = -1;
+};
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
+using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel, CGAL::Triangulation_face_base_with_info_2<Nesting, Kernel>>;
+using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>,
+                                                       CGAL::Exact_predicates_tag>;
+
+void mark_domains(Cdt& cdt) {
+  for (Cdt::Face_handle f : cdt.all_face_handles()) f->info().level = -1;
+  std::list<Cdt::Edge> border;
+  auto flood = [&](Cdt::Face_handle start, int level) {
+    std::list<Cdt::Face_handle> queue{start};
+    while (!queue.empty()) {
+      Cdt::Face_handle f = queue.front();
+      queue.pop_front();
+      if (f->info().level != -1) continue;
+      f->info().level = level;
+      for (int i = 0; i < 3; ++i) {
+        Cdt::Face_handle next = f->neighbor(i);
+        if (next->info().level != -1) continue;
+        if (cdt.is_constrained(Cdt::Edge(f, i)))
+          border.push_back(Cdt::Edge(f, i));
+        else
+          queue.push_back(next);
+      }
+    }
+  };
+  flood(cdt.infinite_face(), 0);
+  while (!border.empty()) {
+    const Cdt::Edge e = border.front();
+    border.pop_front();
+    Cdt::Face_handle next = e.first->neighbor(e.second);
+    if (next->info().level == -1) flood(next, e.first->info().level + 1);
+  }
+}
+
+}  // namespace
+
+std::vector<std::array<int, 3>> fill_ring(const std::vector<Eigen::Vector2d>& outer,
+                                          const std::vector<Eigen::Vector2d>& inner) {
+  Cdt cdt;
+  int index = 0;
+  for (const std::vector<Eigen::Vector2d>* polygon : {&outer, &inner}) {
+    std::vector<Cdt::Vertex_handle> handles;
+    for (const Eigen::Vector2d& p : *polygon) {
+      handles.push_back(cdt.insert(Cdt::Point(p.x(), p.y())));
+      handles.back()->info() = index++;
+    }
+    for (size_t i = 0; i < handles.size(); ++i) cdt.insert_constraint(handles[i], handles[(i + 1) % handles.size()]);
+  }
+  // A point inserted twice, or constraints that cross (CGAL then adds their crossing point): the
+  // polygons touch.
+  if (static_cast<int>(cdt.number_of_vertices()) != index)
+    throw EditConflict("the group's new outline touches or crosses the triangles around it: place it further from "
+                       "the face's edges and from other features");
+  mark_domains(cdt);
+  std::vector<std::array<int, 3>> out;
+  for (Cdt::Face_handle f : cdt.finite_face_handles())
+    if (f->info().level == 1) out.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
+  return out;
+}
+
+void check_closed(const std::vector<std::array<int, 3>>& faces) {
+  std::map<std::pair<int, int>, int> uses;
+  for (const auto& t : faces)
+    for (int c = 0; c < 3; ++c) ++uses[{std::min(t[c], t[(c + 1) % 3]), std::max(t[c], t[(c + 1) % 3])}];
+  for (const auto& [edge, count] : uses)
+    if (count != 2)
+      throw EditConflict("closing the gap would not give a closed surface (the triangles around the gap fold into "
+                         "it): delete fewer or more features");
+}
+
+bool is_closed(const TriangleMesh& mesh) {
+  const MeshTopology topology(mesh);
+  return topology.num_boundary_edges() == 0 && topology.num_nonmanifold_edges() == 0;
+}
+
+TriangleMesh compact_mesh(const MatrixX3d& V, const std::vector<std::array<int, 3>>& faces) {
+  std::vector<int> vertex_id(V.rows(), -1);
+  int next = 0;
+  for (const auto& t : faces)
+    for (int v : t)
+      if (vertex_id[v] < 0) vertex_id[v] = next++;
+  TriangleMesh out;
+  out.V.resize(next, 3);
+  for (Eigen::Index v = 0; v < V.rows(); ++v)
+    if (vertex_id[v] >= 0) out.V.row(vertex_id[v]) = V.row(v);
+  out.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f)
+    for (int c = 0; c < 3; ++c) out.F(static_cast<Eigen::Index>(f), c) = vertex_id[faces[f][c]];
+  return out;
+}
+
+}  // namespace idealize

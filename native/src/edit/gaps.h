@@ -1,0 +1,49 @@
+// Cutting and closing gaps in a host face: what deleting, copying and moving a feature group share
+// (thesis 6.2). A group's gap is bounded by its border loops (feature_groups.h), each on one host
+// plane or cylinder; closing a gap triangulates the loop in the host's chart, and placing a group
+// opens a gap of the group's outline in the host and fills the ring between it and the host.
+#pragma once
+
+#include "core/mesh.h"
+#include "edit/feature_groups.h"
+#include "fit/surface.h"
+
+#include <array>
+#include <vector>
+
+namespace idealize {
+
+// A host triangle that shares an edge with the group (faces labelled `group` in `labels`) and has
+// all three corners on its border lies inside the group's outline: a tessellation's triangle that
+// straddles the edge where the group meets its host, labelled with the host. Such triangles join
+// the group (their label becomes `group`) until none is left, so that the gap's loops are simple.
+void take_rim_triangles(const TriangleMesh& mesh, int group, std::vector<int>& labels);
+
+// The host of each of `loops` (the border loops of the faces labelled `group` in `labels`): the
+// one plane or cylinder along it, holding it as an inner loop. Throws EditConflict naming the
+// features otherwise: a loop along several features, along the mesh's border, on another type of
+// surface, or on the outline of its host.
+std::vector<int> gap_hosts(const TriangleMesh& mesh, const std::vector<int>& labels, int group,
+                           const std::vector<Surface>& surfaces, const std::vector<BorderLoop>& loops);
+
+// The triangles that close a simple polygon given counter-clockwise by its points in a chart, as
+// indices into `polygon`, counter-clockwise (ear clipping, the best-shaped ear first).
+std::vector<std::array<int, 3>> close_polygon(const std::vector<Eigen::Vector2d>& polygon);
+
+// The triangles between an outer polygon (counter-clockwise) and an inner one (clockwise) inside
+// it, both given by their points in a chart (a constrained Delaunay triangulation of the ring);
+// indices into outer followed by inner, counter-clockwise. Throws EditConflict when the polygons
+// touch or cross.
+std::vector<std::array<int, 3>> fill_ring(const std::vector<Eigen::Vector2d>& outer,
+                                          const std::vector<Eigen::Vector2d>& inner);
+
+// Throws EditConflict unless every edge of `faces` has exactly two triangles.
+void check_closed(const std::vector<std::array<int, 3>>& faces);
+
+// The mesh of `faces` (indices into the rows of V), without the vertices no face uses.
+TriangleMesh compact_mesh(const MatrixX3d& V, const std::vector<std::array<int, 3>>& faces);
+
+// Whether the mesh is closed and manifold (no edge with one or more than two triangles).
+bool is_closed(const TriangleMesh& mesh);
+
+}  // namespace idealize
