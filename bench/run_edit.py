@@ -1,5 +1,6 @@
-"""Feature-based editing benchmark (issue 51, push/pull editing): edits of generated parts against
-the same parts built edited in FreeCAD, triangle quality after many large edits, and speed.
+"""Feature-based editing benchmark (issue 51, push/pull editing; issue 52, structure-altering edits):
+edits of generated parts against the same parts built edited in FreeCAD, triangle quality after many
+large edits, and speed. Section 4 (delete, copy and move of feature groups) is bench/structure_edits.py.
 
     /usr/bin/python3 bench/run_edit.py                # full run (about 45 s on 2 cores): results/edit.json + .md
     /usr/bin/python3 bench/run_edit.py --quick        # plate and filleted block, one edit sequence, no speed (~10 s): results/edit-quick.*
@@ -610,6 +611,11 @@ def run_sequence_task(name: str) -> Dict:
     return guarded(run_sequence, name)
 
 
+def run_structure_task(name: str) -> Dict:
+    import structure_edits
+    return guarded(structure_edits.run_part, name)
+
+
 def yes(flag: bool) -> str:
     return "yes" if flag else "**no**"
 
@@ -700,6 +706,8 @@ def markdown(results: Dict) -> str:
             lines.append("| interpolated | %d | %.3f s %s | | %.3f s | %.2f |" % (
                 estimate["triangles"], estimate["edit"], yes(speed["pass"]["speed"]), estimate["idealize"],
                 estimate["edit"] / estimate["idealize"]))
+    import structure_edits
+    lines += structure_edits.markdown(results["structure"], results.get("structure_speed"))
     met, total, missed = results["summary"]["met"], results["summary"]["total"], results["summary"]["missed"]
     lines += ["", "**%d of %d checks met.** Missed: %s" % (met, total, "; ".join(missed) if missed else "none")]
     return "\n".join(lines)
@@ -714,6 +722,8 @@ def summarize(results: Dict) -> Dict:
         checks += [("sequence %s: %s" % (seq["part"], k), v) for k, v in seq["pass"].items()]
     if results.get("speed"):
         checks += [("speed: %s" % k, v) for k, v in results["speed"]["pass"].items()]
+    import structure_edits
+    checks += structure_edits.checks(results["structure"], results.get("structure_speed"))
     return {"met": sum(bool(v) for _, v in checks), "total": len(checks), "missed": [k for k, v in checks if not v]}
 
 
@@ -734,7 +744,10 @@ def main(argv=None) -> int:
                      "machine": machine_info(), "quick": args.quick, "git": git_state()}
     # The slowest tasks first (the sequences, then the parts with most edits).
     with ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        import structure_edits
         mesh_futures = [] if args.quick else [pool.submit(speed_mesh, length) for length in SPEED_MESH_LENGTHS]
+        structure_mesh = None if args.quick else pool.submit(structure_edits.speed_mesh)
+        structure_futures = [pool.submit(run_structure_task, name) for name in structure_edits.PARTS]
         sequence_futures = [pool.submit(run_sequence_task, name) for name in sequences]
         part_futures = [pool.submit(run_part_task, name)
                         for name in sorted(parts, key=lambda n: -len(PARTS[n]["edits"]))]
@@ -748,9 +761,13 @@ def main(argv=None) -> int:
             done[row["part"]] = row
             log("  part %-10s done (%.0f s)" % (row["part"], row.get("seconds", 0)))
         results["parts"] = [done[name] for name in parts]
+        results["structure"] = [future.result() for future in structure_futures]
+        log("  structure-altering edits done")
         meshes = [future.result() for future in mesh_futures]
+        structure_mesh = structure_mesh.result() if structure_mesh is not None else None
     if not args.quick:  # alone, after the pool: timings on an idle machine (as idle as it gets)
         results["speed"] = guarded(lambda _: run_speed(meshes), "speed")
+        results["structure_speed"] = guarded(lambda _: structure_edits.run_speed(*structure_mesh), "structure speed")
         log("  speed done")
     results["total_seconds"] = time.perf_counter() - start
     results["summary"] = summarize(results)

@@ -126,7 +126,8 @@ def copy(layer, feature_ids, translation, rotation=None, remesh=True):
     outline there and the ring around it is triangulated and remeshed. `translation` (3 numbers)
     must lie along the host planes; `rotation` (degrees) turns the copy counter-clockwise about
     the host's outward normal through the group's centre first. The original stays; the copies get
-    new ids after the layer's (``layer.copies``: per id given, its copy's id).
+    new ids after the layer's (``layer.copies``: per id given, its copy's id; ``layer.created`` flags
+    the ring's triangles).
 
     A new place off the host, reaching its edge or another feature, or overlapping the group
     raises :class:`EditConflict` naming them; so does a copy that would cut through the part (its
@@ -144,6 +145,7 @@ def copy(layer, feature_ids, translation, rotation=None, remesh=True):
     _refuse_crossings(out, "the copy")
     out.changed = sorted(set(result["hosts"]) | set(copies))
     out.copies = copies
+    out.created = np.asarray(result["created"], dtype=bool)
     return out
 
 
@@ -151,7 +153,8 @@ def delete(layer, feature_ids, remesh=True):
     """Deletes features, usually a group of :func:`feature_group`: their triangles are lifted off and
     each gap is closed on the plane or cylinder around it, which is remeshed. The other features keep
     their surfaces exactly; they are renumbered in order (``layer.renumbered`` maps each old id
-    that remains to its new one). A gap that no single plane or cylinder surrounds raises
+    that remains to its new one; ``layer.created`` flags the triangles that close the gaps). A gap that
+    no single plane or cylinder surrounds raises
     :class:`EditConflict` naming the features along it."""
     layer = as_feature_layer(layer)
     ids = _ids(feature_ids)
@@ -172,6 +175,7 @@ def delete(layer, feature_ids, remesh=True):
                         _renumbered_graph(layer, renumbered))
     out.changed = list(result["hosts"])
     out.renumbered = renumbered
+    out.created = np.asarray(result["created"], dtype=bool)
     return out
 
 
@@ -192,6 +196,7 @@ def _carried(layer, ids, translation, rotation, remesh):
     out = _edited_layer(layer, result, _keep_flags(None), time.perf_counter() - start)
     _refuse_crossings(out, "the moved group")
     out.changed = sorted(set(result["hosts"]) | set(ids))
+    out.created = np.asarray(result["created"], dtype=bool)
     return out
 
 

@@ -145,6 +145,8 @@ void bind_structure_edits(py::module_& m) {
         d["labels"] = py::array_t<int>(static_cast<py::ssize_t>(result.labels.size()), result.labels.data());
         d["kept"] = result.kept;
         d["hosts"] = result.hosts;
+        d["created"] = py::array_t<bool>(static_cast<py::ssize_t>(result.created.size()),
+                                         reinterpret_cast<const bool*>(result.created.data()));
         d["vertex_deviation"] = std::move(result.vertex_deviation);
         d["target_edge_lengths"] = std::move(result.target_edge_lengths);
         d["remeshing_problem"] = result.remeshing_problem;
@@ -185,6 +187,8 @@ void bind_structure_edits(py::module_& m) {
       d["params"] = new_params;
       d["copies"] = result.copies;
       d["hosts"] = result.hosts;
+      d["created"] = py::array_t<bool>(static_cast<py::ssize_t>(result.created.size()),
+                                       reinterpret_cast<const bool*>(result.created.data()));
       d["vertex_deviation"] = std::move(result.vertex_deviation);
       d["target_edge_lengths"] = std::move(result.target_edge_lengths);
       d["remeshing_problem"] = result.remeshing_problem;

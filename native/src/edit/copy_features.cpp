@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <set>
 #include <string>
 
@@ -112,7 +113,7 @@ Eigen::Isometry3d placement_motion(const TriangleMesh& mesh, const std::vector<i
 // A group lifted off its mesh and carried to its new place: what a copy or a move places.
 struct Decal {
   TriangleMesh mesh;                    // the group's triangles (host rim triangles too), moved
-  std::vector<int> labels;              // per decal face: its feature in the layer
+  std::vector<int> labels;              // per decal face: its feature in the layer (a member)
   std::vector<std::vector<int>> loops;  // per border loop: decal vertices in order, the group on the left
   std::vector<int> hosts;               // per loop: its host plane
   std::vector<char> member;             // per feature of the layer: in the group
@@ -145,6 +146,7 @@ Decal lift_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
                          ": a group is copied and moved on planes only");
     check_keeps_plane(surfaces[h], h, decal.motion, diagonal);
   }
+  const MeshTopology topology(mesh);
   std::vector<int> index(mesh.num_vertices(), -1);
   std::vector<Eigen::Vector3d> points;
   std::vector<std::array<int, 3>> faces;
@@ -161,6 +163,20 @@ Decal lift_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
     }
     faces.push_back(t);
     decal.labels.push_back(labels[f]);
+    // A host's rim triangle inside the outline goes with the member it borders most: it lies off
+    // the host (its corners on the group's side of the edge), and placed elsewhere it is part of
+    // the group, not of the host around it.
+    if (!decal.member[labels[f]]) {
+      std::map<int, int> beside;
+      for (int c = 0; c < 3; ++c) {
+        const int g = topology.face_neighbor(f, c);
+        if (g >= 0 && labels[g] >= 0 && decal.member[labels[g]]) ++beside[labels[g]];
+      }
+      if (!beside.empty())
+        decal.labels.back() = std::max_element(beside.begin(), beside.end(), [](const auto& x, const auto& y) {
+                                return x.second < y.second;
+                              })->first;
+    }
   }
   decal.mesh.V.resize(static_cast<Eigen::Index>(points.size()), 3);
   for (size_t v = 0; v < points.size(); ++v) decal.mesh.V.row(static_cast<Eigen::Index>(v)) = points[v];
@@ -176,11 +192,13 @@ Decal lift_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
 
 // `mesh` with `decal` placed: for each loop, the host's faces under its outline and a ring around
 // them open, and the ring between the gap's border and the outline is triangulated. Decal faces
-// take the label label_of(their feature); `own` marks the features whose place the decal must
+// take the label label_of(their feature); `created` (#F of mesh, or empty) flags the faces an edit
+// made, and out_created the placed mesh's (the ring's too); `own` marks the features whose place the decal must
 // not reach (the original of a copy).
-void place_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
-                 const Decal& decal, const std::vector<int>& label_of, const std::vector<char>& own,
-                 TriangleMesh& out, std::vector<int>& out_labels) {
+void place_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<char>& created,
+                 const std::vector<Surface>& surfaces, const Decal& decal, const std::vector<int>& label_of,
+                 const std::vector<char>& own, TriangleMesh& out, std::vector<int>& out_labels,
+                 std::vector<char>& out_created) {
   TriangleMesh placed;
   placed.F = mesh.F;
   placed.V.resize(mesh.num_vertices() + decal.mesh.num_vertices(), 3);
@@ -233,28 +251,29 @@ void place_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
                       : outline_ids[outline_ids.size() - 1 - (t[k] - outer.size())];
       faces.push_back(face);
       out_labels.push_back(h);
+      out_created.push_back(1);
     }
   }
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (!removed[f]) {
       faces.push_back({mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)});
       out_labels.push_back(labels[f]);
+      out_created.push_back(created.empty() ? 0 : created[f]);
     }
   for (int f = 0; f < decal.mesh.num_faces(); ++f) {
     faces.push_back({shift + decal.mesh.F(f, 0), shift + decal.mesh.F(f, 1), shift + decal.mesh.F(f, 2)});
     out_labels.push_back(label_of[decal.labels[f]]);
+    out_created.push_back(0);
   }
   if (is_closed(mesh)) check_closed(faces);
   out = compact_mesh(placed.V, faces);
 }
 
-// The hosts remeshed at their targets (result.target_edge_lengths), the deviations measured.
+// The faces the edit made remeshed at their features' targets (result.target_edge_lengths), the
+// deviations measured.
 void remesh_hosts(const std::vector<FeatureAdjacency>& adjacency, const std::vector<int>& label_of,
                   const EditOptions& options, CopyResult& result) {
-  result.vertex_deviation = Eigen::VectorXd();
   if (options.remesh) {
-    std::vector<double> targets(result.surfaces.size(), 0.0);
-    for (int h : result.hosts) targets[h] = result.target_edge_lengths[h];
     std::set<std::pair<int, int>> g1;
     auto add = [&](int a, int b) { g1.insert({std::min(a, b), std::max(a, b)}); };
     for (const FeatureAdjacency& a : adjacency)
@@ -263,8 +282,8 @@ void remesh_hosts(const std::vector<FeatureAdjacency>& adjacency, const std::vec
         add(label_of[a.a], label_of[a.b]);
       }
     try {
-      RemeshedLayer remeshed = remesh_adaptive(result.mesh, result.labels, targets, result.surfaces, g1,
-                                               options.remesh_iterations);
+      RemeshedLayer remeshed = remesh_created(result.mesh, result.labels, result.created, result.surfaces,
+                                              result.target_edge_lengths, g1);
       result.mesh = std::move(remeshed.mesh);
       result.labels = std::move(remeshed.labels);
     } catch (const std::exception& e) {
@@ -296,7 +315,7 @@ CopyResult copy_features(const TriangleMesh& mesh, const std::vector<int>& label
     result.target_edge_lengths.push_back(before[f]);
   }
   for (int f : features) result.copies.push_back(label_of[f]);
-  place_decal(mesh, labels, surfaces, decal, label_of, decal.member, result.mesh, result.labels);
+  place_decal(mesh, labels, {}, surfaces, decal, label_of, decal.member, result.mesh, result.labels, result.created);
   result.hosts = decal.hosts;
   std::sort(result.hosts.begin(), result.hosts.end());
   result.hosts.erase(std::unique(result.hosts.begin(), result.hosts.end()), result.hosts.end());
@@ -325,7 +344,8 @@ CopyResult move_features(const TriangleMesh& mesh, const std::vector<int>& label
     if (decal.member[f]) result.surfaces[f] = moved(surfaces[f], decal.motion);
   }
   result.copies = features;
-  place_decal(gone.mesh, without, surfaces, decal, same, std::vector<char>(n, 0), result.mesh, result.labels);
+  place_decal(gone.mesh, without, gone.created, surfaces, decal, same, std::vector<char>(n, 0), result.mesh,
+              result.labels, result.created);
   result.hosts = decal.hosts;
   std::sort(result.hosts.begin(), result.hosts.end());
   result.hosts.erase(std::unique(result.hosts.begin(), result.hosts.end()), result.hosts.end());

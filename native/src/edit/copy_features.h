@@ -23,6 +23,7 @@ struct CopyResult {
   std::vector<Surface> surfaces;  // the layer's surfaces, then the copies'
   std::vector<int> copies;        // per feature given: its copy's id (a move: the feature's own)
   std::vector<int> hosts;         // the planes the copy sits on
+  std::vector<char> created;      // per face of `mesh`: made to fill a gap (not the copy's own)
   Eigen::VectorXd vertex_deviation;         // per vertex, as EditResult's
   std::vector<double> target_edge_lengths;  // per feature (copies too): its remeshing target
   std::string remeshing_problem;            // as EditResult's

@@ -1,4 +1,5 @@
-// Deleting a feature group: lift its triangles off, close each gap on its host, remesh the hosts
+// Deleting a feature group: lift its triangles off, close each gap on its host, remesh the closing
+// triangles
 // (see delete_features.h).
 #include "edit/delete_features.h"
 
@@ -54,6 +55,7 @@ DeleteResult delete_features(const TriangleMesh& mesh, const std::vector<int>& l
     if (group_labels[f] != n) {
       faces.push_back({mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)});
       result.labels.push_back(labels[f] >= 0 ? new_id[labels[f]] : -1);
+      result.created.push_back(0);
     }
   std::vector<std::vector<int>> host_faces(n);
   for (int f = 0; f < mesh.num_faces(); ++f)
@@ -67,6 +69,7 @@ DeleteResult delete_features(const TriangleMesh& mesh, const std::vector<int>& l
     for (const std::array<int, 3>& t : close_polygon(chart)) {
       faces.push_back({loops[i].vertices[t[0]], loops[i].vertices[t[1]], loops[i].vertices[t[2]]});
       result.labels.push_back(new_id[host]);
+      result.created.push_back(1);
     }
     host_set.insert(new_id[host]);
   }
@@ -74,21 +77,19 @@ DeleteResult delete_features(const TriangleMesh& mesh, const std::vector<int>& l
   if (is_closed(mesh)) check_closed(faces);
   result.mesh = compact_mesh(mesh.V, faces);
 
-  // The hosts remeshed at their own density; the other features keep their triangles.
+  // The closing triangles remeshed at their hosts' density; the other triangles stay.
   const std::vector<double> before = remeshing_targets(mesh, labels, surfaces, options.target_edge_lengths,
                                                        options.distance_tolerance);
   result.target_edge_lengths.resize(result.kept.size());
   for (size_t k = 0; k < result.kept.size(); ++k) result.target_edge_lengths[k] = before[result.kept[k]];
   if (options.remesh) {
-    std::vector<double> targets(result.kept.size(), 0.0);
-    for (int h : result.hosts) targets[h] = result.target_edge_lengths[h];
     std::set<std::pair<int, int>> g1;
     for (const FeatureAdjacency& a : adjacency)
       if (a.continuity == Continuity::G1 && !deleted[a.a] && !deleted[a.b])
         g1.insert({std::min(new_id[a.a], new_id[a.b]), std::max(new_id[a.a], new_id[a.b])});
     try {
-      RemeshedLayer remeshed = remesh_adaptive(result.mesh, result.labels, targets, kept_surfaces, g1,
-                                               options.remesh_iterations);
+      RemeshedLayer remeshed = remesh_created(result.mesh, result.labels, result.created, kept_surfaces,
+                                              result.target_edge_lengths, g1);
       result.mesh = std::move(remeshed.mesh);
       result.labels = std::move(remeshed.labels);
     } catch (const std::exception& e) {

@@ -1,6 +1,6 @@
 // Deleting a feature group from a mesh (thesis 6.2.1, "delete"): the group's triangles are lifted
 // off, each hole they leave is closed on the face that surrounds it (a plane, or a cylinder), and
-// that face is remeshed adaptively, so the mesh stays closed, manifold and well shaped.
+// the new triangles are remeshed adaptively, so the mesh stays closed, manifold and well shaped.
 //
 // The thesis lets the features around the gap erode into it until it is one boundary. Here the
 // gap must already be one: each border loop of the group runs along a single plane or cylinder,
@@ -23,6 +23,7 @@ struct DeleteResult {
   std::vector<int> labels;        // per face of `mesh`: the feature's new id
   std::vector<int> kept;          // per remaining feature (new id): its id before the edit
   std::vector<int> hosts;         // the new ids of the features that closed over the gaps
+  std::vector<char> created;      // per face of `mesh`: made to close a gap
   Eigen::VectorXd vertex_deviation;         // per vertex, as EditResult's
   std::vector<double> target_edge_lengths;  // per remaining feature: its remeshing target
   std::string remeshing_problem;            // as EditResult's

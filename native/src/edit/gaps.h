@@ -6,9 +6,12 @@
 
 #include "core/mesh.h"
 #include "edit/feature_groups.h"
+#include "edit/remesh_adaptive.h"
 #include "fit/surface.h"
 
 #include <array>
+#include <set>
+#include <utility>
 #include <vector>
 
 namespace idealize {
@@ -42,6 +45,16 @@ void check_closed(const std::vector<std::array<int, 3>>& faces);
 
 // The mesh of `faces` (indices into the rows of V), without the vertices no face uses.
 TriangleMesh compact_mesh(const MatrixX3d& V, const std::vector<std::array<int, 3>>& faces);
+
+// Remeshes the faces flagged in `created` (#F: the triangles an edit made to close or fill a gap),
+// each at `targets` of its feature, and leaves the others exactly as they are (their vertices on
+// the border with created faces stay; its edges may be split). The created faces of a feature are
+// remeshed as a feature of their own on its surface, so that its old triangles stay. `g1`: the
+// tangent pairs of features (remesh_adaptive). Corners stay where they are. `created` becomes the
+// flags of the remeshed mesh's faces.
+RemeshedLayer remesh_created(const TriangleMesh& mesh, const std::vector<int>& labels, std::vector<char>& created,
+                             const std::vector<Surface>& surfaces, const std::vector<double>& targets,
+                             const std::set<std::pair<int, int>>& g1);
 
 // Whether the mesh is closed and manifold (no edge with one or more than two triangles).
 bool is_closed(const TriangleMesh& mesh);

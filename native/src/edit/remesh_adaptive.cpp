@@ -9,6 +9,7 @@
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
+#include <array>
 #include <string>
 
 namespace idealize {
@@ -90,7 +91,7 @@ RemeshedLayer from_surface_mesh(const SurfaceMesh& sm, const SurfaceMesh::Proper
 
 RemeshedLayer remesh_adaptive(const TriangleMesh& mesh, const std::vector<int>& labels,
                               const std::vector<double>& target_edge_length, const std::vector<Surface>& surfaces,
-                              const std::set<std::pair<int, int>>& g1, int iterations) {
+                              const std::set<std::pair<int, int>>& g1, int iterations, bool keep_others) {
   SurfaceMesh::Property_map<FaceIndex, int> patch;
   SurfaceMesh sm = to_surface_mesh(mesh, labels, patch);
   auto constrained_edge = sm.add_property_map<SurfaceMesh::Edge_index, bool>("e:border", false).first;
@@ -99,7 +100,14 @@ RemeshedLayer remesh_adaptive(const TriangleMesh& mesh, const std::vector<int>& 
     const auto h = sm.halfedge(e), o = sm.opposite(h);
     constrained_edge[e] = sm.is_border(h) || sm.is_border(o) || patch[sm.face(h)] != patch[sm.face(o)];
   }
-  for (VertexIndex v : sm.vertices()) constrained_vertex[v] = features_at(sm, patch, v).size() >= 3 || sm.is_border(v);
+  auto remeshed = [&](int feature) {
+    return feature >= 0 && feature < static_cast<int>(target_edge_length.size()) && target_edge_length[feature] > 0.0;
+  };
+  for (VertexIndex v : sm.vertices()) {
+    const std::vector<int> around = features_at(sm, patch, v);
+    constrained_vertex[v] = around.size() >= 3 || sm.is_border(v) ||
+                            (keep_others && !std::all_of(around.begin(), around.end(), remeshed));
+  }
   const double length = bounding_box_diagonal(mesh);
   const OntoFeatures project{&sm, patch, &surfaces, &g1, length};
   for (size_t feature = 0; feature < target_edge_length.size(); ++feature) {
@@ -115,18 +123,27 @@ RemeshedLayer remesh_adaptive(const TriangleMesh& mesh, const std::vector<int>& 
                                    .edge_is_constrained_map(constrained_edge)
                                    .vertex_is_constrained_map(constrained_vertex)
                                    .protect_constraints(false)
-                                   .relax_constraints(true)
+                                   .relax_constraints(!keep_others)
                                    .projection_functor(project));
     } catch (const std::exception& e) {
       throw MeshError(std::string("the adaptive remeshing failed: ") + e.what());
     }
   }
   sm.collect_garbage();
-  // The final positions: every vertex of an edited feature on its features' surfaces.
+  // The final positions: every vertex of an edited feature on its features' surfaces; with
+  // keep_others, not the vertices kept where they were (a vertex that splitting a border's edge
+  // made is not among them).
+  std::set<std::array<double, 3>> kept;
+  if (keep_others)
+    for (int v = 0; v < mesh.num_vertices(); ++v) kept.insert({mesh.V(v, 0), mesh.V(v, 1), mesh.V(v, 2)});
   std::vector<char> edited(surfaces.size(), 0);
   for (size_t f = 0; f < target_edge_length.size(); ++f) edited[f] = target_edge_length[f] > 0.0;
   for (VertexIndex v : sm.vertices()) {
     const std::vector<int> around = features_at(sm, patch, v);
+    const Point& at = sm.point(v);
+    if (keep_others && (around.size() >= 3 || !std::all_of(around.begin(), around.end(), remeshed)) &&
+        kept.count({at.x(), at.y(), at.z()}))
+      continue;
     if (std::any_of(around.begin(), around.end(), [&](int l) { return l >= 0 && edited[l]; })) sm.point(v) = project(v);
   }
   return from_surface_mesh(sm, patch);

@@ -1,0 +1,244 @@
+"""Section 4 of the editing benchmark (bench/run_edit.py; issue 52, structure-altering edits):
+delete, copy and move of feature groups on generated parts, against the same parts built edited
+in FreeCAD, and their speed on a part of about 75k triangles.
+
+The parts: a 100 x 60 x 10 plate with a round boss (r 8, 15 high, filleted r 3 at its base) at
+(30, 30), and the same plate with a counterbored through hole (r 4; counterbore r 7, 4 deep) there.
+Each is meshed with shapes.quality_mesh(solid, 2.0) and idealized; the group is proposed by
+edit.feature_group from one of its features (the boss's wall, the hole's through part). Edits:
+delete; copy by (40, 0, 0); move by (45, 10, 0) turned 30 degrees. Per edit, against the FreeCAD
+part built with the group deleted, copied or moved:
+
+- the solid (idealize.make_solid) valid, with the FreeCAD part's face count and surface types;
+- its volume within 0.5 % of the FreeCAD part's;
+- every feature outside the group keeps its parameters exactly (the same numbers);
+- the mesh closed, manifold and without crossing triangles (CGAL);
+- triangle quality: the share of triangles with smallest angle >= 20 deg among those the edit made
+  (closing the gaps, the rings around a placed group; target 99 %), and over the whole mesh beside
+  the original's (the other triangles are the original's).
+
+Speed: the boss plate meshed at SPEED_LENGTH (about 75k triangles); each edit's median of
+SPEED_RUNS runs (target <= 2 s), beside idealize's on the same mesh.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from typing import Callable, Dict, List, Tuple
+
+import numpy as np
+
+VOLUME_TARGET = 5e-3        # relative volume error of the edited solid (issue 52)
+WELL_SHAPED_TARGET = 0.99   # share of well-shaped triangles on the remeshed faces
+MIN_ANGLE_DEG = 20.0
+SPEED_TARGET_S = 2.0        # one structure-altering edit of a ~75k-triangle part
+SPEED_LENGTH = 0.7          # Mefisto MaxLength giving about 75k triangles on the boss plate
+SPEED_RUNS = 3
+
+_TYPES = {"Plane": "plane", "Cylinder": "cylinder", "Toroid": "torus", "Cone": "cone", "Sphere": "sphere"}
+
+
+def _cad():
+    import run_edit
+    return run_edit.cad()
+
+
+def boss_plate(centres=((30.0, 30.0),)):
+    FreeCAD, Part = _cad()
+    solid = Part.makeBox(100, 60, 10)
+    for x, y in centres:
+        solid = solid.fuse(Part.makeCylinder(8, 15, FreeCAD.Vector(x, y, 10)))
+    solid = solid.removeSplitter()
+    base = [e for e in solid.Edges if e.Curve.__class__.__name__ == "Circle" and abs(e.Vertexes[0].Point.z - 10) < 1e-6]
+    return solid.makeFillet(3, base) if base else solid
+
+
+def counterbore_plate(centres=((30.0, 30.0),)):
+    FreeCAD, Part = _cad()
+    solid = Part.makeBox(100, 60, 10)
+    for x, y in centres:
+        solid = solid.cut(Part.makeCylinder(4, 10, FreeCAD.Vector(x, y, 0)))
+        solid = solid.cut(Part.makeCylinder(7, 4, FreeCAD.Vector(x, y, 6)))
+    return solid
+
+
+# part: (build, seed feature finder, edits: (label, operation, translation, rotation, expected centres))
+PARTS: Dict[str, Tuple[Callable, Callable, List]] = {
+    "boss": (boss_plate, lambda layer: [f["id"] for f in layer.features
+                                        if f["type"] == "cylinder" and abs(f["params"]["radius"] - 8) < 1e-3], [
+        ("delete", "delete", None, None, []),
+        ("copy +(40, 0, 0)", "copy", (40, 0, 0), None, [(30, 30), (70, 30)]),
+        ("move +(45, 10, 0), 30°", "move", (45, 10, 0), 30.0, [(75, 40)]),
+    ]),
+    "counterbore": (counterbore_plate, lambda layer: [f["id"] for f in layer.features
+                                                      if f["type"] == "cylinder" and abs(f["params"]["radius"] - 4) < 1e-3], [
+        ("delete", "delete", None, None, []),
+        ("copy +(40, 0, 0)", "copy", (40, 0, 0), None, [(30, 30), (70, 30)]),
+        ("move +(45, 10, 0), 30°", "move", (45, 10, 0), 30.0, [(75, 40)]),
+    ]),
+}
+
+
+def _apply(layer, operation, members, translation, rotation):
+    from idealize import edit
+    if operation == "delete":
+        return edit.delete(layer, members)
+    if operation == "copy":
+        return edit.copy(layer, members, translation, rotation)
+    return edit.move(layer, members, translation, rotation)
+
+
+def _well_shaped(V, F, mask=None) -> float:
+    import shapes
+    angles = shapes.min_angles(V, F)
+    if mask is not None:
+        angles = angles[mask]
+    return float(np.mean(angles >= MIN_ANGLE_DEG)) if len(angles) else 1.0
+
+
+def _unchanged(layer, edited, members, operation) -> Dict:
+    """Features outside the group: the same parameters after the edit (under their new ids)."""
+    renumbered = getattr(edited, "renumbered", None) or {f: f for f in range(len(layer.features))}
+    outside = [f for f in range(len(layer.features)) if f not in members]
+    same = sum(edited.features[renumbered[f]]["params"] == layer.features[f]["params"] for f in outside)
+    return {"features": len(outside), "same": int(same)}
+
+
+def run_edit_row(layer, build, members, hosts, label, operation, translation, rotation, centres) -> Dict:
+    import idealize
+    import run_edit
+    row = {"edit": label}
+    try:
+        start = time.perf_counter()
+        edited = _apply(layer, operation, members, translation, rotation)
+        row["seconds"] = time.perf_counter() - start
+        expected = build(centres)
+        made = idealize.make_solid(edited)
+        types = {}
+        for face in expected.Faces:
+            kind = _TYPES.get(face.Surface.__class__.__name__, "freeform")
+            types[kind] = types.get(kind, 0) + 1
+        created = np.asarray(edited.created, dtype=bool)
+        row.update(
+            solid=bool(made.solid), problems=[str(p) for p in made.problems], faces=int(made.faces),
+            exact_faces=len(expected.Faces), types=dict(made.surface_types), exact_types=types,
+            volume=float(made.volume), exact_volume=float(expected.Volume),
+            volume_error=abs(made.volume - expected.Volume) / expected.Volume,
+            unchanged=_unchanged(layer, edited, members, operation), mesh=run_edit.mesh_check(edited),
+            well_shaped_remeshed=_well_shaped(edited.idealized_vertices, edited.mesh.faces, created),
+            created=int(created.sum()),
+            well_shaped=_well_shaped(edited.idealized_vertices, edited.mesh.faces),
+            triangles=int(len(edited.mesh.faces)))
+        mesh = row["mesh"]
+        row["pass"] = {
+            "solid": row["solid"] and not row["problems"] and row["faces"] == row["exact_faces"]
+            and row["types"] == row["exact_types"],
+            "volume": row["volume_error"] <= VOLUME_TARGET,
+            "unchanged": row["unchanged"]["same"] == row["unchanged"]["features"],
+            "mesh": mesh["boundary_edges"] == 0 and mesh["nonmanifold_edges"] == 0
+            and mesh["self_intersecting_pairs"] == 0,
+            "quality": row["well_shaped_remeshed"] >= WELL_SHAPED_TARGET,
+        }
+    except Exception as error:  # an edit that raises: its message is the result
+        row["error"] = "%s: %s" % (type(error).__name__, error)
+        row["pass"] = {"edit": False}
+    return row
+
+
+def run_part(name: str) -> Dict:
+    import run_edit
+    from idealize import edit
+    build, seed, edits = PARTS[name]
+    start = time.perf_counter()
+    layer = run_edit.make_layer(build())
+    group = edit.feature_group(layer, seed(layer)[0])
+    types = [layer.features[m]["type"] for m in group["members"]]
+    out = {"part": name, "triangles": int(len(layer.mesh.faces)), "features": len(layer.features),
+           "group": {"members": group["members"], "types": types, "hosts": group["hosts"]},
+           "well_shaped_original": _well_shaped(layer.idealized_vertices, layer.mesh.faces), "edits": []}
+    for label, operation, translation, rotation, centres in edits:
+        out["edits"].append(run_edit_row(layer, build, group["members"], group["hosts"], label, operation,
+                                         translation, rotation, centres))
+    out["seconds"] = time.perf_counter() - start
+    return out
+
+
+def speed_mesh() -> Tuple[np.ndarray, np.ndarray]:
+    import shapes
+    _cad()
+    return shapes.quality_mesh(boss_plate(), SPEED_LENGTH)
+
+
+def run_speed(V: np.ndarray, F: np.ndarray) -> Dict:
+    import idealize
+    from idealize import edit
+    mesh = idealize.Mesh(V, F)
+    t = time.perf_counter()
+    layer = idealize.idealize(mesh)
+    out = {"triangles": int(len(F)), "idealize": time.perf_counter() - t, "edits": {}, "pass": {}}
+    wall = PARTS["boss"][1](layer)[0]
+    members = edit.feature_group(layer, wall)["members"]
+    for label, operation, translation, rotation, _ in PARTS["boss"][2]:
+        runs = []
+        try:
+            for _ in range(SPEED_RUNS):
+                start = time.perf_counter()
+                _apply(layer, operation, members, translation, rotation)
+                runs.append(time.perf_counter() - start)
+            out["edits"][label] = {"runs": runs, "median": statistics.median(runs)}
+            out["pass"][label] = out["edits"][label]["median"] <= SPEED_TARGET_S
+        except Exception as error:
+            out["edits"][label] = {"error": "%s: %s" % (type(error).__name__, error)}
+            out["pass"][label] = False
+    return out
+
+
+def markdown(parts: List[Dict], speed) -> List[str]:
+    from run_edit import yes
+    lines = ["", "### 4. Structure-altering edits (issue 52)", "",
+             "Groups proposed by edit.feature_group; each edit against the part built edited in FreeCAD. solid: "
+             "valid, with the FreeCAD part's face count and surface types. unchanged: features outside the group "
+             "with the same parameters. quality: share of triangles with smallest angle ≥ 20° among those the "
+             "edit made (whole mesh, original's in brackets).", "",
+             "| part | tris | group (hosts) | edit | time | faces (exact) | solid | volume err ≤ 0.5 % | unchanged | mesh ok (bnd/nm/si) | quality ≥ 99 % (whole, orig) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for part in parts:
+        if "edits" not in part:
+            lines.append("| %s | **failed**: %s |||||||||||" % (part["part"], part.get("error")))
+            continue
+        group = "%s (%s)" % ("+".join(part["group"]["types"]), ", ".join(str(h) for h in part["group"]["hosts"]))
+        for row in part["edits"]:
+            head = "| %s | %d | %s | %s |" % (part["part"], part["triangles"], group, row["edit"])
+            if "error" in row:
+                lines.append(head + " **refused/failed**: %s |||||||" % row["error"].replace("|", "/"))
+                continue
+            ok, m = row["pass"], row["mesh"]
+            lines.append(head + " %.2f s | %d (%d) | %s | %.5f %% %s | %d of %d %s | %s (%d/%d/%d) | %.2f %% %s (%.2f %%, %.2f %%) |" % (
+                row["seconds"], row["faces"], row["exact_faces"], yes(ok["solid"]), 100 * row["volume_error"],
+                yes(ok["volume"]), row["unchanged"]["same"], row["unchanged"]["features"], yes(ok["unchanged"]),
+                yes(ok["mesh"]), m["boundary_edges"], m["nonmanifold_edges"], m["self_intersecting_pairs"],
+                100 * row["well_shaped_remeshed"], yes(ok["quality"]), 100 * row["well_shaped"],
+                100 * part["well_shaped_original"]))
+    if speed is None:
+        lines += ["", "Speed: skipped (--quick)."]
+    elif "edits" not in speed:
+        lines += ["", "Speed: **failed**: %s" % speed.get("error")]
+    else:
+        cells = []
+        for label, row in speed["edits"].items():
+            cells.append("%s %s" % (label, "**failed**: %s" % row["error"] if "error" in row else "%.2f s %s" % (
+                row["median"], yes(speed["pass"][label]))))
+        lines += ["", "Speed on the boss plate at %d triangles (median of %d, ≤ %.0f s): %s; idealize on the same mesh "
+                  "%.2f s." % (speed["triangles"], SPEED_RUNS, SPEED_TARGET_S, "; ".join(cells), speed["idealize"])]
+    return lines
+
+
+def checks(parts: List[Dict], speed) -> List[Tuple[str, bool]]:
+    out = []
+    for part in parts:
+        for row in part.get("edits", [{"edit": "run", "pass": {"run": False}}]):
+            out += [("%s %s: %s" % (part["part"], row["edit"], k), v) for k, v in row["pass"].items()]
+    if speed is not None:
+        out += [("structure speed: %s" % k, v) for k, v in speed.get("pass", {"run": False}).items()]
+    return out
