@@ -18,7 +18,8 @@ class IdealizeWorkbench(FreeCADGui.Workbench):
         # Imported on first activation only: keeps FreeCAD start-up free of the native core.
         import idealize.gui.commands  # noqa: F401  (registers the commands)
         commands = ["Idealize_Segment", "Idealize_SegmentIdealize", "Idealize_DeviationMap", "Idealize_MakeSolid",
-                    "Idealize_ExportStep", "Idealize_PushPull"]
+                    "Idealize_ExportStep", "Idealize_PushPull", "Idealize_DeleteFeature", "Idealize_MoveFeature",
+                    "Idealize_CopyFeature"]
         self.appendToolbar("Idealize", commands)
         self.appendMenu("&Idealize", commands)
 

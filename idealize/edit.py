@@ -213,22 +213,25 @@ def _placed(function, layer, ids, translation, rotation, remesh):
 
 # The edits `apply` replays: {"op": name, ...the function's keyword arguments}.
 _OPERATIONS = {"push_pull": ("feature_id", "distance"), "set_parameter": ("feature_id", "name", "value"),
-               "move": ("feature_ids", "translation"), "rotate": ("feature_ids", "degrees", "axis", "center")}
+               "move": ("feature_ids", "translation", "rotation"), "rotate": ("feature_ids", "degrees", "axis", "center"),
+               "delete": ("feature_ids",), "copy": ("feature_ids", "translation", "rotation")}
 
 
 def apply(layer, edits):
     """Applies a list of edits in order and returns the last layer: each edit is a dict
-    ``{"op": "push_pull" | "set_parameter" | "move" | "rotate", ...}`` with the keyword arguments
-    of the function of that name (and ``keep``), as a document stores its edit history, e.g.
-    ``{"op": "push_pull", "feature_id": 3, "distance": 5.0}``."""
-    functions = {"push_pull": push_pull, "set_parameter": set_parameter, "move": move, "rotate": rotate}
+    ``{"op": "push_pull" | "set_parameter" | "move" | "rotate" | "delete" | "copy", ...}`` with the
+    keyword arguments of the function of that name (and ``keep``, ``remesh``), as a document stores
+    its edit history, e.g. ``{"op": "push_pull", "feature_id": 3, "distance": 5.0}``."""
+    functions = {"push_pull": push_pull, "set_parameter": set_parameter, "move": move, "rotate": rotate,
+                 "delete": delete, "copy": copy}
     for number, step in enumerate(edits):
         step = dict(step)
         op = step.pop("op", None)
         if op not in functions:
             raise ValueError("edit %d: unknown operation %r; the operations are %s" % (
                 number + 1, op, ", ".join(sorted(functions))))
-        unknown = set(step) - set(_OPERATIONS[op]) - {"keep", "remesh"}
+        allowed = set(_OPERATIONS[op]) | ({"remesh"} if op in ("delete", "copy") else {"keep", "remesh"})
+        unknown = set(step) - allowed
         if unknown:
             raise ValueError("edit %d (%s): unknown argument(s) %s" % (number + 1, op, sorted(unknown)))
         layer = functions[op](layer, **step)

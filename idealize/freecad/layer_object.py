@@ -153,7 +153,7 @@ def deviation_scale(vertex_deviation, distance_tolerance):
 
 def layer_colors(mode, features, labels, faces, vertex_deviation, distance_tolerance, highlight=None):
     """(M, 3) RGB of a layer's facets in colour mode `mode` (COLOR_MODES), with every feature but
-    `highlight` (a feature id) dimmed when given."""
+    `highlight` (a feature id, or a list of them) dimmed when given."""
     labels = np.asarray(labels, dtype=np.int64)
     if mode == "Feature":
         colors = patch_colors(labels)
@@ -166,7 +166,7 @@ def layer_colors(mode, features, labels, faces, vertex_deviation, distance_toler
     else:
         colors = type_colors(features, labels)
     if highlight is not None:
-        others = labels != highlight
+        others = ~np.isin(labels, np.atleast_1d(np.asarray(highlight, dtype=np.int64)))
         colors[others] = 0.35 * colors[others] + 0.65 * 0.85
     return colors
 

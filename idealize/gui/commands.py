@@ -292,6 +292,52 @@ class PushPullCommand:
         FreeCADGui.Control.showDialog(panel)
 
 
+class _FeatureGroupCommand:
+    """Delete, move or copy the feature group of the selected face of a feature layer."""
+    operation = "delete"
+    menu = "Delete feature"
+    tooltip = ""
+
+    def GetResources(self):
+        return {"Pixmap": icon("Idealize_FeatureGroup"), "MenuText": self.menu, "ToolTip": self.tooltip}
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and FreeCADGui.Control.activeDialog() is False \
+            and _selected_layer_feature() is not None
+
+    def Activated(self):
+        from .task_feature_group import FeatureGroupPanel
+        selected = _selected_layer_feature()
+        if selected is None:
+            return
+        obj, feature, _ = selected
+        try:
+            panel = FeatureGroupPanel(obj, feature, self.operation)
+        except Exception as error:
+            report_error(self.menu, error)
+            return
+        FreeCADGui.Selection.clearSelection()  # the highlight would hide the preview's colours
+        FreeCADGui.Control.showDialog(panel)
+
+
+class DeleteFeatureCommand(_FeatureGroupCommand):
+    operation, menu = "delete", "Delete feature"
+    tooltip = ("Delete the boss, pocket or hole of the selected face of a feature layer, with its blends: its "
+               "place is closed on the face around it and remeshed; a B-rep solid made from it is regenerated")
+
+
+class MoveFeatureCommand(_FeatureGroupCommand):
+    operation, menu = "move", "Move feature"
+    tooltip = ("Move the boss, pocket or hole of the selected face of a feature layer to another place on the "
+               "face it sits on, turned if asked; a B-rep solid made from it is regenerated")
+
+
+class CopyFeatureCommand(_FeatureGroupCommand):
+    operation, menu = "copy", "Copy feature"
+    tooltip = ("Copy the boss, pocket or hole of the selected face of a feature layer to another place on the "
+               "face it sits on, turned if asked; a B-rep solid made from it is regenerated")
+
+
 def _selected_shapes():
     return [o for o in FreeCADGui.Selection.getSelection() if o.isDerivedFrom("Part::Feature")]
 
@@ -326,3 +372,6 @@ FreeCADGui.addCommand("Idealize_DeviationMap", DeviationMapCommand())
 FreeCADGui.addCommand("Idealize_MakeSolid", MakeSolidCommand())
 FreeCADGui.addCommand("Idealize_ExportStep", ExportStepCommand())
 FreeCADGui.addCommand("Idealize_PushPull", PushPullCommand())
+FreeCADGui.addCommand("Idealize_DeleteFeature", DeleteFeatureCommand())
+FreeCADGui.addCommand("Idealize_MoveFeature", MoveFeatureCommand())
+FreeCADGui.addCommand("Idealize_CopyFeature", CopyFeatureCommand())

@@ -77,9 +77,11 @@ class Preview:
         self.shown = False
         self.layer_visible = obj.ViewObject.Visibility
 
-    def show(self, layer):
+    def show(self, layer, highlight=None):
+        """Draw `layer`, every feature but `highlight` (ids) dimmed when given."""
         colors = layer_object.layer_colors("Type", layer.features, layer.labels, layer.mesh.faces,
-                                           layer.vertex_deviation, layer.distance_tolerance)
+                                           layer.vertex_deviation, layer.distance_tolerance,
+                                           highlight=list(highlight) if highlight else None)
         self.material.diffuseColor.setValues(0, len(colors), colors.tolist())
         self.material.diffuseColor.setNum(len(colors))
         V, F = layer.mesh.vertices, layer.mesh.faces
