@@ -179,6 +179,53 @@ def delete(layer, feature_ids, remesh=True):
     return out
 
 
+def set_depth(layer, hole_feature_id, depth, entry=None, remesh=True):
+    """Gives a plain hole (its wall, a cylinder, and a flat floor or none) the depth `depth`,
+    measured along its axis from the face it is drilled from (`entry`, a feature id; by default a
+    blind hole's face, or the larger of a through hole's two). A depth that reaches the far side
+    (within the distance tolerance) makes a through hole: the far face opens. A through hole given a
+    smaller depth becomes blind again, with a flat floor.
+
+    The hole is remade: its wall and floor get new ids after the other features, which keep their
+    surfaces exactly and are renumbered in order (``layer.renumbered``; ``layer.hole`` is
+    ``{"wall": id, "floor": id or None, "through": bool, "depth": mm}``). A hole with chamfers or a
+    counterbore, or one whose axis leaves the part through a face that is not a plane, raises
+    :class:`EditConflict` naming the features."""
+    layer = as_feature_layer(layer)
+    wall = int(hole_feature_id)
+    _feature(layer, wall)
+    if entry is not None:
+        _feature(layer, entry)
+    start = time.perf_counter()
+    faces, labels = _kept_triangles(layer)
+    result = native.set_hole_depth(
+        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64), faces, labels,
+        [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features],
+        list(layer.adjacency), wall, float(depth), entry=-1 if entry is None else int(entry),
+        distance_tolerance=float(layer.distance_tolerance), remesh=bool(remesh),
+        target_edge_lengths=list(layer.edge_lengths or []))
+    kept = [old for old in result["kept"] if old >= 0]
+    renumbered = {old: new for new, old in enumerate(kept)}
+    features, adjacency, relations = _renumbered_graph(layer, renumbered)
+    new_wall, new_floor = result["wall"], result["floor"]
+    hosts = list(result["hosts"])
+    wall_feature = dict(layer.features[wall], id=new_wall)
+    features.append(wall_feature)
+    adjacency += [{"a": h, "b": new_wall, "continuity": "G0"} for h in hosts]
+    if new_floor >= 0:
+        features.append(dict(features[hosts[0]], id=new_floor))
+        adjacency.append({"a": new_wall, "b": new_floor, "continuity": "G0"})
+    result["changed"] = [False] * len(features)
+    out = _edited_layer(layer, result, _keep_flags(None), time.perf_counter() - start,
+                        (features, adjacency, relations))
+    out.changed = sorted(set(hosts) | {new_wall} | ({new_floor} if new_floor >= 0 else set()))
+    out.renumbered = renumbered
+    out.created = np.asarray(result["created"], dtype=bool)
+    out.hole = {"wall": new_wall, "floor": new_floor if new_floor >= 0 else None,
+                "through": bool(result["through"]), "depth": float(result["depth"])}
+    return out
+
+
 def _island(layer, ids):
     """Whether features `ids` are a whole feature group on host planes."""
     for f in ids:
@@ -214,23 +261,24 @@ def _placed(function, layer, ids, translation, rotation, remesh):
 # The edits `apply` replays: {"op": name, ...the function's keyword arguments}.
 _OPERATIONS = {"push_pull": ("feature_id", "distance"), "set_parameter": ("feature_id", "name", "value"),
                "move": ("feature_ids", "translation", "rotation"), "rotate": ("feature_ids", "degrees", "axis", "center"),
-               "delete": ("feature_ids",), "copy": ("feature_ids", "translation", "rotation")}
+               "delete": ("feature_ids",), "copy": ("feature_ids", "translation", "rotation"),
+               "set_depth": ("hole_feature_id", "depth", "entry")}
 
 
 def apply(layer, edits):
     """Applies a list of edits in order and returns the last layer: each edit is a dict
-    ``{"op": "push_pull" | "set_parameter" | "move" | "rotate" | "delete" | "copy", ...}`` with the
+    ``{"op": "push_pull" | "set_parameter" | "move" | "rotate" | "delete" | "copy" | "set_depth", ...}`` with the
     keyword arguments of the function of that name (and ``keep``, ``remesh``), as a document stores
     its edit history, e.g. ``{"op": "push_pull", "feature_id": 3, "distance": 5.0}``."""
     functions = {"push_pull": push_pull, "set_parameter": set_parameter, "move": move, "rotate": rotate,
-                 "delete": delete, "copy": copy}
+                 "delete": delete, "copy": copy, "set_depth": set_depth}
     for number, step in enumerate(edits):
         step = dict(step)
         op = step.pop("op", None)
         if op not in functions:
             raise ValueError("edit %d: unknown operation %r; the operations are %s" % (
                 number + 1, op, ", ".join(sorted(functions))))
-        allowed = set(_OPERATIONS[op]) | ({"remesh"} if op in ("delete", "copy") else {"keep", "remesh"})
+        allowed = set(_OPERATIONS[op]) | ({"remesh"} if op in ("delete", "copy", "set_depth") else {"keep", "remesh"})
         unknown = set(step) - allowed
         if unknown:
             raise ValueError("edit %d (%s): unknown argument(s) %s" % (number + 1, op, sorted(unknown)))

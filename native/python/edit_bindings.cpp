@@ -4,6 +4,7 @@
 #include "edit/delete_features.h"
 #include "edit/edit.h"
 #include "edit/feature_groups.h"
+#include "edit/hole_depth.h"
 #include "prepare/remesh_cgal.h"
 
 #include <pybind11/eigen.h>
@@ -159,6 +160,48 @@ void bind_structure_edits(py::module_& m) {
       "dict(V, F, labels (new ids), kept (old id per new id), hosts (new ids), vertex_deviation, "
       "target_edge_lengths, remeshing_problem). Raises EditConflict when a gap has no single face to close it.");
 
+  m.def(
+      "set_hole_depth",
+      [](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F, std::vector<int> labels,
+         const std::vector<std::string>& types, const std::vector<py::dict>& params,
+         const std::vector<py::dict>& adjacency, int wall, double depth, int entry, double distance_tolerance,
+         bool remesh, std::vector<double> target_edge_lengths) {
+        const std::vector<Surface> surfaces = surfaces_from(types, params);
+        const TriangleMesh mesh = mesh_from(V, F);
+        const std::vector<FeatureAdjacency> graph = adjacency_from(adjacency);
+        const EditOptions options = structure_options(distance_tolerance, remesh, std::move(target_edge_lengths));
+        HoleResult result;
+        {
+          py::gil_scoped_release release;
+          result = set_hole_depth(mesh, labels, surfaces, graph, wall, depth, entry, options);
+        }
+        py::list new_params;
+        for (const Surface& s : result.surfaces) new_params.append(surface_params(s));
+        py::dict d;
+        d["V"] = std::move(result.mesh.V);
+        d["F"] = std::move(result.mesh.F);
+        d["labels"] = py::array_t<int>(static_cast<py::ssize_t>(result.labels.size()), result.labels.data());
+        d["params"] = new_params;
+        d["kept"] = result.kept;
+        d["wall"] = result.wall;
+        d["floor"] = result.floor;
+        d["through"] = result.through;
+        d["depth"] = result.depth;
+        d["hosts"] = result.hosts;
+        d["created"] = py::array_t<bool>(static_cast<py::ssize_t>(result.created.size()),
+                                         reinterpret_cast<const bool*>(result.created.data()));
+        d["vertex_deviation"] = std::move(result.vertex_deviation);
+        d["target_edge_lengths"] = std::move(result.target_edge_lengths);
+        d["remeshing_problem"] = result.remeshing_problem;
+        return d;
+      },
+      py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("adjacency"),
+      py::arg("wall"), py::arg("depth"), py::kw_only(), py::arg("entry") = -1, py::arg("distance_tolerance") = 0.0,
+      py::arg("remesh") = true, py::arg("target_edge_lengths") = std::vector<double>(),
+      "Gives the plain hole of cylinder `wall` the depth `depth` from its entry face (a through hole when it "
+      "reaches the far side): dict(V, F, labels, params (the kept features', then the wall's and the floor's), "
+      "kept (old id per new id, -1 new), wall, floor (-1: through), through, depth, hosts, created, "
+      "vertex_deviation, target_edge_lengths, remeshing_problem). Raises EditConflict when it cannot.");
   using Placing = CopyResult (*)(const TriangleMesh&, const std::vector<int>&, const std::vector<Surface>&,
                                  const std::vector<FeatureAdjacency>&, const std::vector<int>&, const Placement&,
                                  const EditOptions&);

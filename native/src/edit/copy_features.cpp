@@ -2,6 +2,7 @@
 #include "edit/copy_features.h"
 
 #include "edit/contacts.h"
+#include "edit/decals.h"
 #include "edit/delete_features.h"
 #include "edit/feature_groups.h"
 #include "edit/gaps.h"
@@ -110,16 +111,6 @@ Eigen::Isometry3d placement_motion(const TriangleMesh& mesh, const std::vector<i
   return motion;
 }
 
-// A group lifted off its mesh and carried to its new place: what a copy or a move places.
-struct Decal {
-  TriangleMesh mesh;                    // the group's triangles (host rim triangles too), moved
-  std::vector<int> labels;              // per decal face: its feature in the layer (a member)
-  std::vector<std::vector<int>> loops;  // per border loop: decal vertices in order, the group on the left
-  std::vector<int> hosts;               // per loop: its host plane
-  std::vector<char> member;             // per feature of the layer: in the group
-  Eigen::Isometry3d motion;             // what carried it
-};
-
 Decal lift_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
                  const std::vector<int>& features, const Placement& placement) {
   const int n = static_cast<int>(surfaces.size());
@@ -190,11 +181,9 @@ Decal lift_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
   return decal;
 }
 
-// `mesh` with `decal` placed: for each loop, the host's faces under its outline and a ring around
-// them open, and the ring between the gap's border and the outline is triangulated. Decal faces
-// take the label label_of(their feature); `created` (#F of mesh, or empty) flags the faces an edit
-// made, and out_created the placed mesh's (the ring's too); `own` marks the features whose place the decal must
-// not reach (the original of a copy).
+}  // namespace
+
+// Placing a decal (see decals.h).
 void place_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<char>& created,
                  const std::vector<Surface>& surfaces, const Decal& decal, const std::vector<int>& label_of,
                  const std::vector<char>& own, TriangleMesh& out, std::vector<int>& out_labels,
@@ -268,6 +257,8 @@ void place_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
   if (is_closed(mesh)) check_closed(faces);
   out = compact_mesh(placed.V, faces);
 }
+
+namespace {
 
 // The faces the edit made remeshed at their features' targets (result.target_edge_lengths), the
 // deviations measured.
