@@ -613,7 +613,7 @@ def run_sequence_task(name: str) -> Dict:
 
 def run_structure_task(name: str) -> Dict:
     import structure_edits
-    return guarded(structure_edits.run_part, name)
+    return guarded(structure_edits.run_task, name)
 
 
 def yes(flag: bool) -> str:
@@ -747,7 +747,7 @@ def main(argv=None) -> int:
         import structure_edits
         mesh_futures = [] if args.quick else [pool.submit(speed_mesh, length) for length in SPEED_MESH_LENGTHS]
         structure_mesh = None if args.quick else pool.submit(structure_edits.speed_mesh)
-        structure_futures = [pool.submit(run_structure_task, name) for name in structure_edits.PARTS]
+        structure_futures = [pool.submit(run_structure_task, name) for name in structure_edits.TASKS]
         sequence_futures = [pool.submit(run_sequence_task, name) for name in sequences]
         part_futures = [pool.submit(run_part_task, name)
                         for name in sorted(parts, key=lambda n: -len(PARTS[n]["edits"]))]

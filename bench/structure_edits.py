@@ -6,8 +6,9 @@ The parts: a 100 x 60 x 10 plate with a round boss (r 8, 15 high, filleted r 3 a
 (30, 30), and the same plate with a counterbored through hole (r 4; counterbore r 7, 4 deep) there.
 Each is meshed with shapes.quality_mesh(solid, 2.0) and idealized; the group is proposed by
 edit.feature_group from one of its features (the boss's wall, the hole's through part). Edits:
-delete; copy by (40, 0, 0); move by (45, 10, 0) turned 30 degrees. Per edit, against the FreeCAD
-part built with the group deleted, copied or moved:
+delete; copy by (40, 0, 0); move by (45, 10, 0) turned 30 degrees. And a plate with a blind hole
+(r 4, 6 deep) whose depth is set to 25 (through: 10), then 4 and 6 (blind again). Per edit, against
+the FreeCAD part built with the group deleted, copied or moved, or the hole of that depth:
 
 - the solid (idealize.make_solid) valid, with the FreeCAD part's face count and surface types;
 - its volume within 0.5 % of the FreeCAD part's;
@@ -78,6 +79,62 @@ PARTS: Dict[str, Tuple[Callable, Callable, List]] = {
         ("move +(45, 10, 0), 30°", "move", (45, 10, 0), 30.0, [(75, 40)]),
     ]),
 }
+
+
+def blind_plate(depth=6.0):
+    """100 x 60 x 10, a hole of radius 4 at (30, 30), `depth` deep from the top (10: through)."""
+    FreeCAD, Part = _cad()
+    return Part.makeBox(100, 60, 10).cut(Part.makeCylinder(4, depth, FreeCAD.Vector(30, 30, 10 - depth)))
+
+
+# Depths given in turn to the hole of blind_plate(6): through (past the wall), blind at 4, at 6.
+DEPTHS = [(25.0, 10.0), (4.0, 4.0), (6.0, 6.0)]
+
+
+def run_depths() -> Dict:
+    """Blind -> through -> blind -> blind: each step's solid against blind_plate(expected depth)."""
+    import idealize
+    import run_edit
+    from idealize import edit
+    start = time.perf_counter()
+    layer = run_edit.make_layer(blind_plate())
+    wall = [f["id"] for f in layer.features if f["type"] == "cylinder"][0]
+    out = {"part": "blind hole", "triangles": int(len(layer.mesh.faces)), "features": len(layer.features),
+           "group": {"members": [wall], "types": ["cylinder"], "hosts": []},
+           "well_shaped_original": _well_shaped(layer.idealized_vertices, layer.mesh.faces), "edits": []}
+    for asked, exact in DEPTHS:
+        row = {"edit": "depth %g (%s)" % (asked, "through" if exact == 10.0 else "blind")}
+        try:
+            t = time.perf_counter()
+            edited = edit.set_depth(layer, wall, asked)
+            row["seconds"] = time.perf_counter() - t
+            expected = blind_plate(exact)
+            made = idealize.make_solid(edited)
+            created = np.asarray(edited.created, dtype=bool)
+            same = sum(edited.features[new]["params"] == layer.features[old]["params"]
+                       for old, new in edited.renumbered.items())
+            row.update(solid=bool(made.solid), problems=[str(p) for p in made.problems], faces=int(made.faces),
+                       exact_faces=len(expected.Faces), volume=float(made.volume), exact_volume=float(expected.Volume),
+                       volume_error=abs(made.volume - expected.Volume) / expected.Volume,
+                       unchanged={"features": len(edited.renumbered), "same": int(same)},
+                       mesh=run_edit.mesh_check(edited), through=edited.hole["through"],
+                       well_shaped_remeshed=_well_shaped(edited.idealized_vertices, edited.mesh.faces, created),
+                       well_shaped=_well_shaped(edited.idealized_vertices, edited.mesh.faces))
+            m = row["mesh"]
+            row["pass"] = {"solid": row["solid"] and not row["problems"] and row["faces"] == row["exact_faces"]
+                           and row["through"] == (exact == 10.0),
+                           "volume": row["volume_error"] <= VOLUME_TARGET,
+                           "unchanged": same == len(edited.renumbered),
+                           "mesh": m["boundary_edges"] == 0 and m["nonmanifold_edges"] == 0
+                           and m["self_intersecting_pairs"] == 0,
+                           "quality": row["well_shaped_remeshed"] >= WELL_SHAPED_TARGET}
+            layer, wall = edited, edited.hole["wall"]
+        except Exception as error:
+            row["error"] = "%s: %s" % (type(error).__name__, error)
+            row["pass"] = {"edit": False}
+        out["edits"].append(row)
+    out["seconds"] = time.perf_counter() - start
+    return out
 
 
 def _apply(layer, operation, members, translation, rotation):
@@ -162,6 +219,13 @@ def run_part(name: str) -> Dict:
                                          translation, rotation, centres))
     out["seconds"] = time.perf_counter() - start
     return out
+
+
+def run_task(name: str) -> Dict:
+    return run_depths() if name == "blind hole" else run_part(name)
+
+
+TASKS = tuple(PARTS) + ("blind hole",)
 
 
 def speed_mesh() -> Tuple[np.ndarray, np.ndarray]:

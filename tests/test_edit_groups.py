@@ -249,3 +249,49 @@ def test_a_pocket_turns_and_a_copy_over_the_recess_would_break_through(pocketed)
     assert {tuple(np.round(np.abs(turned.features[f]["params"]["normal"]), 9)) for f in walls} == normals
     with pytest.raises(edit.EditConflict, match="cut through the part"):
         edit.copy(layer, group["members"], (50, 0, 0))
+
+
+def blind_plate(depth):
+    """A 100 x 60 x 10 plate with a hole of radius 4 at (30, 30), `depth` deep from the top (10: through)."""
+    FreeCAD, Part, _ = shapes.freecad()
+    return Part.makeBox(100, 60, 10).cut(Part.makeCylinder(4, depth, FreeCAD.Vector(30, 30, 10 - depth)))
+
+
+@pytest.fixture(scope="module")
+def blind():
+    return _layer(blind_plate(6.0))
+
+
+def test_a_blind_hole_goes_through_and_back(blind):
+    layer, _ = blind
+    wall, = of_type(layer, "cylinder", radius=4.0)
+    top, = plane_at_height(layer, 10.0)
+    bottom, = plane_at_height(layer, 0.0)
+    through = edit.set_depth(layer, wall, 25.0)  # past the wall: through, 10 deep
+    assert through.hole["through"] and through.hole["floor"] is None
+    assert through.hole["depth"] == pytest.approx(10.0, abs=1e-9)
+    assert sorted(through.changed) == sorted([through.renumbered[top], through.renumbered[bottom], through.hole["wall"]])
+    check_deleted(layer, through, None, 7, blind_plate(10.0).Volume)
+    again = edit.set_depth(through, through.hole["wall"], 4.0)  # blind again, 4 deep from the larger face
+    assert not again.hole["through"] and again.hole["depth"] == pytest.approx(4.0)
+    floor = again.features[again.hole["floor"]]
+    assert floor["type"] == "plane" and abs(floor["params"]["point"][2] - 6.0) < 1e-6
+    check_deleted(through, again, None, 8, blind_plate(4.0).Volume)
+    # The wall keeps its radius and axis exactly.
+    for key in ("radius", "axis"):
+        assert np.allclose(again.features[again.hole["wall"]]["params"][key], layer.features[wall]["params"][key],
+                           atol=1e-12)
+
+
+def test_only_a_plain_hole_in_planes_gets_a_depth(counterbore, shaft, boss):
+    layer, _ = counterbore
+    with pytest.raises(edit.EditConflict, match="only a plain hole"):
+        edit.set_depth(layer, of_type(layer, "cylinder", radius=4.0)[0], 3.0)
+    layer, _ = shaft
+    with pytest.raises(edit.EditConflict, match="in planes only"):
+        edit.set_depth(layer, of_type(layer, "cylinder", radius=4.0)[0], 3.0)
+    layer, _ = boss
+    with pytest.raises(edit.EditConflict, match="boss, not a hole"):
+        edit.set_depth(layer, of_type(layer, "cylinder", radius=8.0)[0], 3.0)
+    with pytest.raises(ValueError, match="positive"):
+        edit.set_depth(layer, of_type(layer, "cylinder", radius=8.0)[0], -1.0)
