@@ -18,8 +18,8 @@ the FreeCAD part built with the group deleted, copied or moved, or the hole of t
   (closing the gaps, the rings around a placed group; target 99 %), and over the whole mesh beside
   the original's (the other triangles are the original's).
 
-Speed: the boss plate meshed at SPEED_LENGTH (about 75k triangles); each edit's median of
-SPEED_RUNS runs (target <= 2 s), beside idealize's on the same mesh.
+Speed: the boss plate meshed at SPEED_LENGTH (97k triangles, more than the issue's 75k); each
+edit's median of SPEED_RUNS runs (target <= 2 s), beside idealize's on the same mesh.
 """
 
 from __future__ import annotations
@@ -34,7 +34,8 @@ VOLUME_TARGET = 5e-3        # relative volume error of the edited solid (issue 5
 WELL_SHAPED_TARGET = 0.99   # share of well-shaped triangles on the remeshed faces
 MIN_ANGLE_DEG = 20.0
 SPEED_TARGET_S = 2.0        # one structure-altering edit of a ~75k-triangle part
-SPEED_LENGTH = 0.7          # Mefisto MaxLength giving about 75k triangles on the boss plate
+SPEED_LENGTH = 0.7          # Mefisto MaxLength: 97k triangles on the boss plate (its counts come in
+                            # steps), more than the issue's 75k, so the figure errs on the slow side
 SPEED_RUNS = 3
 
 _TYPES = {"Plane": "plane", "Cylinder": "cylinder", "Toroid": "torus", "Cone": "cone", "Sphere": "sphere"}
