@@ -113,10 +113,7 @@ def feature_group(layer, feature_id):
     passing them to :func:`delete`."""
     layer = as_feature_layer(layer)
     _feature(layer, feature_id)
-    faces, labels = _kept_triangles(layer)
-    group = native.feature_group(
-        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64), faces, labels,
-        [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features], int(feature_id))
+    group = native.feature_group(*_layer_arguments(layer)[:5], int(feature_id))
     return {"members": list(group["members"]), "hosts": list(group["hosts"])}
 
 
@@ -153,20 +150,15 @@ def delete(layer, feature_ids, remesh=True):
     """Deletes features, usually a group of :func:`feature_group`: their triangles are lifted off and
     each gap is closed on the plane or cylinder around it, which is remeshed. The other features keep
     their surfaces exactly; they are renumbered in order (``layer.renumbered`` maps each old id
-    that remains to its new one; ``layer.created`` flags the triangles that close the gaps). A gap that
-    no single plane or cylinder surrounds raises
-    :class:`EditConflict` naming the features along it."""
+    that remains to its new one; ``layer.created`` flags the triangles that close the gaps). A gap
+    that no single plane or cylinder surrounds raises :class:`EditConflict` naming the features
+    along it."""
     layer = as_feature_layer(layer)
     ids = _ids(feature_ids)
     for f in ids:
         _feature(layer, f)
     start = time.perf_counter()
-    faces, labels = _kept_triangles(layer)
-    result = native.delete_features(
-        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64), faces, labels,
-        [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features],
-        list(layer.adjacency), ids, distance_tolerance=float(layer.distance_tolerance), remesh=bool(remesh),
-        target_edge_lengths=list(layer.edge_lengths or []))
+    result = native.delete_features(*_layer_arguments(layer), ids, **_structure_options(layer, remesh))
     kept = list(result["kept"])
     renumbered = {old: new for new, old in enumerate(kept)}
     result["params"] = [layer.features[old]["params"] for old in kept]
@@ -197,13 +189,8 @@ def set_depth(layer, hole_feature_id, depth, entry=None, remesh=True):
     if entry is not None:
         _feature(layer, entry)
     start = time.perf_counter()
-    faces, labels = _kept_triangles(layer)
-    result = native.set_hole_depth(
-        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64), faces, labels,
-        [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features],
-        list(layer.adjacency), wall, float(depth), entry=-1 if entry is None else int(entry),
-        distance_tolerance=float(layer.distance_tolerance), remesh=bool(remesh),
-        target_edge_lengths=list(layer.edge_lengths or []))
+    result = native.set_hole_depth(*_layer_arguments(layer), wall, float(depth),
+                                   entry=-1 if entry is None else int(entry), **_structure_options(layer, remesh))
     kept = [old for old in result["kept"] if old >= 0]
     renumbered = {old: new for new, old in enumerate(kept)}
     features, adjacency, relations = _renumbered_graph(layer, renumbered)
@@ -249,13 +236,21 @@ def _carried(layer, ids, translation, rotation, remesh):
 
 def _placed(function, layer, ids, translation, rotation, remesh):
     """native.copy_features or move_features of the group `ids` of `layer`."""
+    return function(*_layer_arguments(layer), ids, _vector(translation, "translation"),
+                    np.radians(float(rotation or 0.0)), **_structure_options(layer, remesh))
+
+
+def _layer_arguments(layer):
+    """What the core's structure-altering edits read of a layer: V, F, labels, types, params,
+    adjacency."""
     faces, labels = _kept_triangles(layer)
-    return function(
-        np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64), faces, labels,
-        [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features],
-        list(layer.adjacency), ids, _vector(translation, "translation"),
-        np.radians(float(rotation or 0.0)), distance_tolerance=float(layer.distance_tolerance),
-        remesh=bool(remesh), target_edge_lengths=list(layer.edge_lengths or []))
+    return (np.ascontiguousarray(layer.idealized_vertices, dtype=np.float64), faces, labels,
+            [f["type"] for f in layer.features], [dict(f["params"]) for f in layer.features], list(layer.adjacency))
+
+
+def _structure_options(layer, remesh):
+    return {"distance_tolerance": float(layer.distance_tolerance), "remesh": bool(remesh),
+            "target_edge_lengths": list(layer.edge_lengths or [])}
 
 
 # The edits `apply` replays: {"op": name, ...the function's keyword arguments}.

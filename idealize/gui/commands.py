@@ -279,17 +279,21 @@ class PushPullCommand:
 
     def Activated(self):
         from .task_push_pull import PushPullPanel
-        selected = _selected_layer_feature()
-        if selected is None:
-            return
-        obj, feature, facet = selected
-        try:
-            panel = PushPullPanel(obj, feature, facet)
-        except Exception as error:
-            report_error("Push/Pull", error)
-            return
-        FreeCADGui.Selection.clearSelection()  # the highlight would hide the preview's colours
-        FreeCADGui.Control.showDialog(panel)
+        _open_panel("Push/Pull", lambda obj, feature, facet: PushPullPanel(obj, feature, facet))
+
+
+def _open_panel(title, make):
+    """The task panel make(layer object, feature, facet) of the selected face, shown."""
+    selected = _selected_layer_feature()
+    if selected is None:
+        return
+    try:
+        panel = make(*selected)
+    except Exception as error:
+        report_error(title, error)
+        return
+    FreeCADGui.Selection.clearSelection()  # the highlight would hide the preview's colours
+    FreeCADGui.Control.showDialog(panel)
 
 
 class _FeatureGroupCommand:
@@ -307,17 +311,7 @@ class _FeatureGroupCommand:
 
     def Activated(self):
         from .task_feature_group import FeatureGroupPanel
-        selected = _selected_layer_feature()
-        if selected is None:
-            return
-        obj, feature, _ = selected
-        try:
-            panel = FeatureGroupPanel(obj, feature, self.operation)
-        except Exception as error:
-            report_error(self.menu, error)
-            return
-        FreeCADGui.Selection.clearSelection()  # the highlight would hide the preview's colours
-        FreeCADGui.Control.showDialog(panel)
+        _open_panel(self.menu, lambda obj, feature, facet: FeatureGroupPanel(obj, feature, self.operation))
 
 
 class DeleteFeatureCommand(_FeatureGroupCommand):

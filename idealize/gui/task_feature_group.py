@@ -11,7 +11,7 @@ import FreeCADGui
 
 from .. import edit
 from ..freecad import layer_object
-from .task_push_pull import PREVIEW_DELAY_MS, Preview, regenerate_solids
+from .task_push_pull import PREVIEW_DELAY_MS, Preview, apply_in_one_step
 
 UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                        "Resources", "ui", "FeatureGroup.ui")
@@ -143,22 +143,14 @@ class FeatureGroupPanel:
     def accept(self):
         """Apply the edit as one undo step; regenerate the solids made from the layer's source."""
         import FreeCAD
-        from .commands import report_error
         self.timer.stop()
         if self.unchanged():
             return self.reject()
         title = self.operation()[2]
-        doc = self.obj.Document
-        doc.openTransaction(title)
-        try:
-            layer = layer_object.add_edit(self.obj, self.step())
-            solids = regenerate_solids(self.obj, layer)
-            doc.recompute()
-            doc.commitTransaction()
-        except Exception as error:  # the document must not keep half an edit
-            doc.abortTransaction()
-            report_error(title, error)
+        done = apply_in_one_step(self.obj, self.step(), title)
+        if done is None:
             return False
+        layer, solids = done
         FreeCAD.Console.PrintMessage("Idealize: %s: %s, %d features now%s\n" % (
             self.obj.Label, title.lower(), len(layer.features),
             "; %d solid(s) regenerated" % solids if solids else ""))

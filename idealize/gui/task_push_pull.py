@@ -57,6 +57,25 @@ def regenerate_solids(obj, layer):
     return count
 
 
+def apply_in_one_step(obj, step, title):
+    """Add the edit `step` to the layer object as one undo step named `title`, regenerating the
+    solids made from its source. Returns (the edited layer, solids regenerated), or None when it
+    failed: the transaction is then aborted and the error reported."""
+    from .commands import report_error
+    doc = obj.Document
+    doc.openTransaction(title)
+    try:
+        layer = layer_object.add_edit(obj, step)
+        solids = regenerate_solids(obj, layer)
+        doc.recompute()
+        doc.commitTransaction()
+    except Exception as error:  # the document must not keep half an edit
+        doc.abortTransaction()
+        report_error(title, error)
+        return None
+    return layer, solids
+
+
 class Preview:
     """The edited mesh drawn in the 3D view (coloured by feature type) in place of the layer."""
 
@@ -254,21 +273,13 @@ class PushPullPanel:
 
     def accept(self):
         """Apply the edit as one undo step; regenerate the solids made from the layer's source."""
-        from .commands import report_error
         self.timer.stop()
         if self.unchanged():
             return self.reject()
-        doc = self.obj.Document
-        doc.openTransaction("Push/Pull")
-        try:
-            layer = layer_object.add_edit(self.obj, self.step())
-            solids = regenerate_solids(self.obj, layer)
-            doc.recompute()
-            doc.commitTransaction()
-        except Exception as error:  # the document must not keep half an edit
-            doc.abortTransaction()
-            report_error("Push/Pull", error)
+        done = apply_in_one_step(self.obj, self.step(), "Push/Pull")
+        if done is None:
             return False
+        layer, solids = done
         FreeCAD.Console.PrintMessage("Idealize: %s edited (features %s changed)%s\n" % (
             self.obj.Label, ", ".join(str(f) for f in layer.changed),
             "; %d solid(s) regenerated" % solids if solids else ""))

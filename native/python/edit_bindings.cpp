@@ -95,6 +95,26 @@ EditOptions structure_options(double distance_tolerance, bool remesh, std::vecto
   return options;
 }
 
+// The parts of a structure-altering edit's result that every one returns.
+py::dict edited_mesh(TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<char>& created,
+                     Eigen::VectorXd& deviation, std::vector<double>& targets, const std::string& problem) {
+  py::dict d;
+  d["V"] = std::move(mesh.V);
+  d["F"] = std::move(mesh.F);
+  d["labels"] = py::array_t<int>(static_cast<py::ssize_t>(labels.size()), labels.data());
+  d["created"] = py::array_t<bool>(static_cast<py::ssize_t>(created.size()), reinterpret_cast<const bool*>(created.data()));
+  d["vertex_deviation"] = std::move(deviation);
+  d["target_edge_lengths"] = std::move(targets);
+  d["remeshing_problem"] = problem;
+  return d;
+}
+
+py::list params_of(const std::vector<Surface>& surfaces) {
+  py::list out;
+  for (const Surface& s : surfaces) out.append(surface_params(s));
+  return out;
+}
+
 void bind_structure_edits(py::module_& m) {
   m.def(
       "self_intersections",
@@ -140,17 +160,10 @@ void bind_structure_edits(py::module_& m) {
           py::gil_scoped_release release;
           result = delete_features(mesh, labels, surfaces, graph, features, options);
         }
-        py::dict d;
-        d["V"] = std::move(result.mesh.V);
-        d["F"] = std::move(result.mesh.F);
-        d["labels"] = py::array_t<int>(static_cast<py::ssize_t>(result.labels.size()), result.labels.data());
+        py::dict d = edited_mesh(result.mesh, result.labels, result.created, result.vertex_deviation,
+                                 result.target_edge_lengths, result.remeshing_problem);
         d["kept"] = result.kept;
         d["hosts"] = result.hosts;
-        d["created"] = py::array_t<bool>(static_cast<py::ssize_t>(result.created.size()),
-                                         reinterpret_cast<const bool*>(result.created.data()));
-        d["vertex_deviation"] = std::move(result.vertex_deviation);
-        d["target_edge_lengths"] = std::move(result.target_edge_lengths);
-        d["remeshing_problem"] = result.remeshing_problem;
         return d;
       },
       py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("adjacency"),
@@ -175,24 +188,15 @@ void bind_structure_edits(py::module_& m) {
           py::gil_scoped_release release;
           result = set_hole_depth(mesh, labels, surfaces, graph, wall, depth, entry, options);
         }
-        py::list new_params;
-        for (const Surface& s : result.surfaces) new_params.append(surface_params(s));
-        py::dict d;
-        d["V"] = std::move(result.mesh.V);
-        d["F"] = std::move(result.mesh.F);
-        d["labels"] = py::array_t<int>(static_cast<py::ssize_t>(result.labels.size()), result.labels.data());
-        d["params"] = new_params;
+        py::dict d = edited_mesh(result.mesh, result.labels, result.created, result.vertex_deviation,
+                                 result.target_edge_lengths, result.remeshing_problem);
+        d["params"] = params_of(result.surfaces);
         d["kept"] = result.kept;
         d["wall"] = result.wall;
         d["floor"] = result.floor;
         d["through"] = result.through;
         d["depth"] = result.depth;
         d["hosts"] = result.hosts;
-        d["created"] = py::array_t<bool>(static_cast<py::ssize_t>(result.created.size()),
-                                         reinterpret_cast<const bool*>(result.created.data()));
-        d["vertex_deviation"] = std::move(result.vertex_deviation);
-        d["target_edge_lengths"] = std::move(result.target_edge_lengths);
-        d["remeshing_problem"] = result.remeshing_problem;
         return d;
       },
       py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("adjacency"),
@@ -221,20 +225,11 @@ void bind_structure_edits(py::module_& m) {
         py::gil_scoped_release release;
         result = function(mesh, labels, surfaces, graph, features, placement, options);
       }
-      py::list new_params;
-      for (const Surface& s : result.surfaces) new_params.append(surface_params(s));
-      py::dict d;
-      d["V"] = std::move(result.mesh.V);
-      d["F"] = std::move(result.mesh.F);
-      d["labels"] = py::array_t<int>(static_cast<py::ssize_t>(result.labels.size()), result.labels.data());
-      d["params"] = new_params;
+      py::dict d = edited_mesh(result.mesh, result.labels, result.created, result.vertex_deviation,
+                               result.target_edge_lengths, result.remeshing_problem);
+      d["params"] = params_of(result.surfaces);
       d["copies"] = result.copies;
       d["hosts"] = result.hosts;
-      d["created"] = py::array_t<bool>(static_cast<py::ssize_t>(result.created.size()),
-                                       reinterpret_cast<const bool*>(result.created.data()));
-      d["vertex_deviation"] = std::move(result.vertex_deviation);
-      d["target_edge_lengths"] = std::move(result.target_edge_lengths);
-      d["remeshing_problem"] = result.remeshing_problem;
       return d;
     };
   };

@@ -6,7 +6,6 @@
 #include "edit/delete_features.h"
 #include "edit/feature_groups.h"
 #include "edit/gaps.h"
-#include "edit/remesh_adaptive.h"
 
 #include <algorithm>
 #include <array>
@@ -261,27 +260,16 @@ void place_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
 namespace {
 
 // The faces the edit made remeshed at their features' targets (result.target_edge_lengths), the
-// deviations measured.
+// deviations measured; the tangent pairs are the layer's and their copies' (label_of).
 void remesh_hosts(const std::vector<FeatureAdjacency>& adjacency, const std::vector<int>& label_of,
                   const EditOptions& options, CopyResult& result) {
-  if (options.remesh) {
-    std::set<std::pair<int, int>> g1;
-    auto add = [&](int a, int b) { g1.insert({std::min(a, b), std::max(a, b)}); };
-    for (const FeatureAdjacency& a : adjacency)
-      if (a.continuity == Continuity::G1) {
-        add(a.a, a.b);
-        add(label_of[a.a], label_of[a.b]);
-      }
-    try {
-      RemeshedLayer remeshed = remesh_created(result.mesh, result.labels, result.created, result.surfaces,
-                                              result.target_edge_lengths, g1);
-      result.mesh = std::move(remeshed.mesh);
-      result.labels = std::move(remeshed.labels);
-    } catch (const std::exception& e) {
-      result.remeshing_problem = e.what();
-    }
-  }
-  result.vertex_deviation = vertex_deviation(result.mesh, result.labels, result.surfaces);
+  std::vector<int> same(label_of.size());
+  for (size_t f = 0; f < same.size(); ++f) same[f] = static_cast<int>(f);
+  std::set<std::pair<int, int>> g1 = tangent_pairs(adjacency, same);
+  const std::set<std::pair<int, int>> copied = tangent_pairs(adjacency, label_of);
+  g1.insert(copied.begin(), copied.end());
+  result.vertex_deviation = finish_created(result.mesh, result.labels, result.created, result.surfaces,
+                                           result.target_edge_lengths, g1, options.remesh, result.remeshing_problem);
 }
 
 }  // namespace

@@ -5,7 +5,6 @@
 
 #include "edit/feature_groups.h"
 #include "edit/gaps.h"
-#include "edit/remesh_adaptive.h"
 
 #include <algorithm>
 #include <array>
@@ -82,21 +81,9 @@ DeleteResult delete_features(const TriangleMesh& mesh, const std::vector<int>& l
                                                        options.distance_tolerance);
   result.target_edge_lengths.resize(result.kept.size());
   for (size_t k = 0; k < result.kept.size(); ++k) result.target_edge_lengths[k] = before[result.kept[k]];
-  if (options.remesh) {
-    std::set<std::pair<int, int>> g1;
-    for (const FeatureAdjacency& a : adjacency)
-      if (a.continuity == Continuity::G1 && !deleted[a.a] && !deleted[a.b])
-        g1.insert({std::min(new_id[a.a], new_id[a.b]), std::max(new_id[a.a], new_id[a.b])});
-    try {
-      RemeshedLayer remeshed = remesh_created(result.mesh, result.labels, result.created, kept_surfaces,
-                                              result.target_edge_lengths, g1);
-      result.mesh = std::move(remeshed.mesh);
-      result.labels = std::move(remeshed.labels);
-    } catch (const std::exception& e) {
-      result.remeshing_problem = e.what();
-    }
-  }
-  result.vertex_deviation = vertex_deviation(result.mesh, result.labels, kept_surfaces);
+  result.vertex_deviation = finish_created(result.mesh, result.labels, result.created, kept_surfaces,
+                                           result.target_edge_lengths, tangent_pairs(adjacency, new_id),
+                                           options.remesh, result.remeshing_problem);
   return result;
 }
 

@@ -270,6 +270,32 @@ RemeshedLayer remesh_created(const TriangleMesh& mesh, const std::vector<int>& l
   return out;
 }
 
+std::set<std::pair<int, int>> tangent_pairs(const std::vector<FeatureAdjacency>& adjacency,
+                                            const std::vector<int>& new_id) {
+  std::set<std::pair<int, int>> g1;
+  for (const FeatureAdjacency& a : adjacency) {
+    if (a.continuity != Continuity::G1) continue;
+    const int x = new_id[a.a], y = new_id[a.b];
+    if (x >= 0 && y >= 0) g1.insert({std::min(x, y), std::max(x, y)});
+  }
+  return g1;
+}
+
+Eigen::VectorXd finish_created(TriangleMesh& mesh, std::vector<int>& labels, std::vector<char>& created,
+                               const std::vector<Surface>& surfaces, const std::vector<double>& targets,
+                               const std::set<std::pair<int, int>>& g1, bool remesh, std::string& problem) {
+  if (remesh) {
+    try {
+      RemeshedLayer remeshed = remesh_created(mesh, labels, created, surfaces, targets, g1);
+      mesh = std::move(remeshed.mesh);
+      labels = std::move(remeshed.labels);
+    } catch (const std::exception& e) {
+      problem = e.what();
+    }
+  }
+  return vertex_deviation(mesh, labels, surfaces);
+}
+
 TriangleMesh compact_mesh(const MatrixX3d& V, const std::vector<std::array<int, 3>>& faces) {
   std::vector<int> vertex_id(V.rows(), -1);
   int next = 0;

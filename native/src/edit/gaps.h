@@ -5,12 +5,14 @@
 #pragma once
 
 #include "core/mesh.h"
+#include "edit/edit.h"
 #include "edit/feature_groups.h"
 #include "edit/remesh_adaptive.h"
 #include "fit/surface.h"
 
 #include <array>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -55,6 +57,18 @@ TriangleMesh compact_mesh(const MatrixX3d& V, const std::vector<std::array<int, 
 RemeshedLayer remesh_created(const TriangleMesh& mesh, const std::vector<int>& labels, std::vector<char>& created,
                              const std::vector<Surface>& surfaces, const std::vector<double>& targets,
                              const std::set<std::pair<int, int>>& g1);
+
+// The tangent (G1) pairs of `adjacency` under new ids (new_id[old], -1 for a feature gone), smaller
+// id first.
+std::set<std::pair<int, int>> tangent_pairs(const std::vector<FeatureAdjacency>& adjacency,
+                                            const std::vector<int>& new_id);
+
+// What every structure-altering edit ends with: when `remesh`, the created faces remeshed
+// (remesh_created; a failure is recorded in `problem` and the mesh stays as made), then each
+// vertex's deviation from its features (vertex_deviation), returned.
+Eigen::VectorXd finish_created(TriangleMesh& mesh, std::vector<int>& labels, std::vector<char>& created,
+                               const std::vector<Surface>& surfaces, const std::vector<double>& targets,
+                               const std::set<std::pair<int, int>>& g1, bool remesh, std::string& problem);
 
 // Whether the mesh is closed and manifold (no edge with one or more than two triangles).
 bool is_closed(const TriangleMesh& mesh);

@@ -239,23 +239,11 @@ HoleResult set_hole_depth(const TriangleMesh& mesh, const std::vector<int>& labe
   if (result.through) result.hosts.push_back(exit);
   result.target_edge_lengths = gone.target_edge_lengths;
   result.target_edge_lengths.resize(result.surfaces.size(), targets[wall]);
-  if (options.remesh) {
-    std::vector<int> new_id(n, -1);
-    for (size_t k = 0; k < gone.kept.size(); ++k) new_id[gone.kept[k]] = static_cast<int>(k);
-    std::set<std::pair<int, int>> g1;
-    for (const FeatureAdjacency& adj : adjacency)
-      if (adj.continuity == Continuity::G1 && new_id[adj.a] >= 0 && new_id[adj.b] >= 0)
-        g1.insert({std::min(new_id[adj.a], new_id[adj.b]), std::max(new_id[adj.a], new_id[adj.b])});
-    try {
-      RemeshedLayer remeshed = remesh_created(result.mesh, result.labels, result.created, result.surfaces,
-                                              result.target_edge_lengths, g1);
-      result.mesh = std::move(remeshed.mesh);
-      result.labels = std::move(remeshed.labels);
-    } catch (const std::exception& e) {
-      result.remeshing_problem = e.what();
-    }
-  }
-  result.vertex_deviation = vertex_deviation(result.mesh, result.labels, result.surfaces);
+  std::vector<int> new_id(n, -1);
+  for (size_t k = 0; k < gone.kept.size(); ++k) new_id[gone.kept[k]] = static_cast<int>(k);
+  result.vertex_deviation = finish_created(result.mesh, result.labels, result.created, result.surfaces,
+                                           result.target_edge_lengths, tangent_pairs(adjacency, new_id),
+                                           options.remesh, result.remeshing_problem);
   return result;
 }
 
