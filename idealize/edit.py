@@ -51,22 +51,24 @@ def set_parameter(layer, feature_id, name, value, keep=None, remesh=True):
     return _edit(layer, [feature_id], parameter=names[name], value=float(value), keep=keep, remesh=remesh)
 
 
-def move(layer, feature_ids, translation, rotation=None, keep=None, remesh=True):
+def move(layer, feature_ids, translation, rotation=None, onto=None, keep=None, remesh=True):
     """Moves features rigidly by `translation` (3 numbers): a hole across its face, a cone along
     its axis.
 
     A feature group that sits as an island on planes (:func:`feature_group`: a boss, a pocket, a
     counterbored hole) travels as a decal: it is lifted off, its place closed, and placed again as
     :func:`copy` places a copy (turned by `rotation` degrees about the host's normal first), so it
-    may go anywhere on its host, overlapping its old place or not; its features keep their ids. Other features move by deforming the mesh
+    may go anywhere on its host, overlapping its old place or not, or onto another plane (`onto`);
+    its features keep their ids. Other features move by deforming the mesh
     around them, their tangent neighbours following unless `keep` says otherwise; `rotation` is
     for groups only (see :func:`rotate` for the rest)."""
     layer = as_feature_layer(layer)
     ids = _ids(feature_ids)
     if _island(layer, ids):
-        return _carried(layer, ids, translation, rotation, remesh)
-    if rotation is not None:
-        raise ValueError("features %s are not a group on planes: turn them with rotate()" % ids)
+        return _carried(layer, ids, translation, rotation, onto, remesh)
+    if rotation is not None or onto is not None:
+        raise ValueError("features %s are not a group on planes: turn them with rotate(), and they stay on "
+                         "their faces" % ids)
     return _deformed(layer, ids, translation, keep, remesh)
 
 
@@ -117,12 +119,14 @@ def feature_group(layer, feature_id):
     return {"members": list(group["members"]), "hosts": list(group["hosts"])}
 
 
-def copy(layer, feature_ids, translation, rotation=None, remesh=True):
+def copy(layer, feature_ids, translation, rotation=None, onto=None, remesh=True):
     """Copies a feature group (see :func:`feature_group`) to another place on the planes it sits on,
     as a decal: its triangles and surfaces are carried rigidly, the host opens a gap of the group's
     outline there and the ring around it is triangulated and remeshed. `translation` (3 numbers)
     must lie along the host planes; `rotation` (degrees) turns the copy counter-clockwise about
-    the host's outward normal through the group's centre first. The original stays; the copies get
+    the host's outward normal through the group's centre first. With `onto` (a plane feature's id),
+    the copy goes onto that face instead: its centre to the nearest point of that plane, facing out
+    of it, then turned and moved along it. The original stays; the copies get
     new ids after the layer's (``layer.copies``: per id given, its copy's id; ``layer.created`` flags
     the ring's triangles).
 
@@ -134,7 +138,7 @@ def copy(layer, feature_ids, translation, rotation=None, remesh=True):
     for f in ids:
         _feature(layer, f)
     start = time.perf_counter()
-    result = _placed(native.copy_features, layer, ids, translation, rotation, remesh)
+    result = _placed(native.copy_features, layer, ids, translation, rotation, onto, remesh)
     copies = list(result["copies"])
     result["changed"] = [False] * len(result["params"])
     out = _edited_layer(layer, result, _keep_flags(None), time.perf_counter() - start,
@@ -222,10 +226,10 @@ def _island(layer, ids):
             and all(layer.features[h]["type"] == "plane" for h in group["hosts"]))
 
 
-def _carried(layer, ids, translation, rotation, remesh):
+def _carried(layer, ids, translation, rotation, onto, remesh):
     """The group `ids` lifted off and placed again at its new place (native.move_features)."""
     start = time.perf_counter()
-    result = _placed(native.move_features, layer, ids, translation, rotation, remesh)
+    result = _placed(native.move_features, layer, ids, translation, rotation, onto, remesh)
     result["changed"] = [f in ids for f in range(len(layer.features))]
     out = _edited_layer(layer, result, _keep_flags(None), time.perf_counter() - start)
     _refuse_crossings(out, "the moved group")
@@ -234,10 +238,13 @@ def _carried(layer, ids, translation, rotation, remesh):
     return out
 
 
-def _placed(function, layer, ids, translation, rotation, remesh):
+def _placed(function, layer, ids, translation, rotation, onto, remesh):
     """native.copy_features or move_features of the group `ids` of `layer`."""
+    if onto is not None:
+        _feature(layer, onto)
     return function(*_layer_arguments(layer), ids, _vector(translation, "translation"),
-                    np.radians(float(rotation or 0.0)), **_structure_options(layer, remesh))
+                    np.radians(float(rotation or 0.0)), onto=-1 if onto is None else int(onto),
+                    **_structure_options(layer, remesh))
 
 
 def _layer_arguments(layer):
@@ -255,8 +262,9 @@ def _structure_options(layer, remesh):
 
 # The edits `apply` replays: {"op": name, ...the function's keyword arguments}.
 _OPERATIONS = {"push_pull": ("feature_id", "distance"), "set_parameter": ("feature_id", "name", "value"),
-               "move": ("feature_ids", "translation", "rotation"), "rotate": ("feature_ids", "degrees", "axis", "center"),
-               "delete": ("feature_ids",), "copy": ("feature_ids", "translation", "rotation"),
+               "move": ("feature_ids", "translation", "rotation", "onto"),
+               "rotate": ("feature_ids", "degrees", "axis", "center"),
+               "delete": ("feature_ids",), "copy": ("feature_ids", "translation", "rotation", "onto"),
                "set_depth": ("hole_feature_id", "depth", "entry")}
 
 

@@ -295,3 +295,28 @@ def test_only_a_plain_hole_in_planes_gets_a_depth(counterbore, shaft, boss):
         edit.set_depth(layer, of_type(layer, "cylinder", radius=8.0)[0], 3.0)
     with pytest.raises(ValueError, match="positive"):
         edit.set_depth(layer, of_type(layer, "cylinder", radius=8.0)[0], -1.0)
+
+
+def test_a_boss_goes_onto_the_plate_bottom(wide_boss):
+    layer, _ = wide_boss
+    group = edit.feature_group(layer, of_type(layer, "cylinder", radius=8.0)[0])
+    bottom, = plane_at_height(layer, 0.0)
+    FreeCAD, Part, _ = shapes.freecad()
+    solid = Part.makeBox(100, 60, 10).fuse(Part.makeCylinder(8, 15, FreeCAD.Vector(30, 30, 10)))
+    solid = solid.fuse(Part.makeCylinder(8, 15, FreeCAD.Vector(70, 30, -15))).removeSplitter()
+    base = [e for e in solid.Edges if e.Curve.__class__.__name__ == "Circle"
+            and min(abs(e.Vertexes[0].Point.z - 10), abs(e.Vertexes[0].Point.z)) < 1e-6]
+    expected = solid.makeFillet(3, base)
+    after = edit.copy(layer, group["members"], (40, 0, 0), onto=bottom)
+    made = idealize.make_solid(after)
+    assert made.solid and made.faces == len(expected.Faces)
+    assert made.volume == pytest.approx(expected.Volume, rel=1e-6)
+    top = after.features[after.copies[group["members"].index(plane_at_height(layer, 25.0)[0])]]
+    assert abs(top["params"]["point"][2] + 15.0) < 1e-6 and abs(abs(top["params"]["normal"][2]) - 1) < 1e-12
+    assert well_shaped(after) >= 0.99
+    moved = edit.move(layer, group["members"], (40, 0, 0), onto=bottom)
+    plate = Part.makeBox(100, 60, 10).Volume
+    assert idealize.make_solid(moved).volume == pytest.approx(plate + (expected.Volume - plate) / 2, rel=1e-6)
+    with pytest.raises(edit.EditConflict, match="reaches feature"):  # a side face 10 high: the boss does not fit
+        edit.copy(layer, group["members"], (0, 0, 0), onto=[f["id"] for f in layer.features if f["type"] == "plane"
+                                                          and abs(f["params"]["normal"][1]) > 0.999][0])

@@ -81,6 +81,13 @@ def run():
     form.findChild(QtGui.QDoubleSpinBox, "offsetX").setValue(40.0)
     wait(2.0)
     result["preview"] = form.findChild(QtGui.QLabel, "status").text()
+    onto = form.findChild(QtGui.QComboBox, "onto")
+    result["onto_choices"] = onto.count()
+    onto.setCurrentIndex(1)  # another plane: the boss goes there (or says why it cannot)
+    wait(2.0)
+    result["onto_status"] = form.findChild(QtGui.QLabel, "status").text()
+    onto.setCurrentIndex(0)
+    wait(2.0)
     from idealize.gui import task_feature_group
     preview = task_feature_group.active_panel.preview.node
     undo_before = len(doc.UndoNames)
@@ -144,6 +151,8 @@ def test_the_panel_shows_the_group_and_refuses_a_place_off_the_plate(groups_run)
     assert groups_run["highlight_nodes"] == 1  # the highlighted layer replaces the object in the view
     assert groups_run["conflict"].startswith("Cannot apply") and "feature" in groups_run["conflict"]
     assert groups_run["preview"].startswith("Preview")
+    assert groups_run["onto_choices"] >= 6  # its own face, and the plate's other five planes
+    assert groups_run["onto_status"].startswith(("Preview", "Cannot apply"))
 
 
 def test_ok_copies_the_boss_in_one_undo_step_and_regenerates_the_solid(groups_run):

@@ -1,7 +1,7 @@
 """Task panel of Delete, Move and Copy feature (Resources/ui/FeatureGroup.ui): the group of the
 selected feature (idealize.edit.feature_group) is listed and highlighted in the 3D view; members can
 be ticked or unticked. Delete lifts the group off; Move and Copy place it at an offset along the face
-it sits on, turned about that face's normal. A preview of the edited mesh replaces the layer as the
+it sits on, or onto another plane, turned about that face's normal. A preview of the edited mesh replaces the layer as the
 values change, and a placement the group cannot take shows why in the panel. OK applies the edit as
 one undo step and regenerates the B-rep solids made from the layer's source.
 """
@@ -20,12 +20,14 @@ OPERATIONS = [("Delete", "delete", "Delete feature"), ("Move", "move", "Move fea
               ("Copy", "copy", "Copy feature")]
 
 
-def group_step(operation, members, translation=(0.0, 0.0, 0.0), rotation=0.0):
-    """The edit (a dict for idealize.edit.apply) of the panel's values."""
+def group_step(operation, members, translation=(0.0, 0.0, 0.0), rotation=0.0, onto=None):
+    """The edit (a dict for idealize.edit.apply) of the panel's values; `onto`: another plane's id."""
     step = {"op": operation, "feature_ids": [int(m) for m in members]}
     if operation != "delete":
         step["translation"] = [float(x) for x in translation]
         step["rotation"] = float(rotation)
+        if onto is not None:
+            step["onto"] = int(onto)
     return step
 
 
@@ -70,6 +72,12 @@ class FeatureGroupPanel:
             self.form.members.addItem(item)
         self.form.members.blockSignals(False)
         self.form.members.itemChanged.connect(self.schedule)
+        # Onto: the face it sits on, or another plane of the layer.
+        self.form.onto.addItem("The face it sits on", None)
+        for f in self.layer.features:
+            if f["type"] == "plane" and f["id"] not in group["members"] and f["id"] not in self.hosts:
+                self.form.onto.addItem("%d: plane, %s" % (f["id"], key_parameters(f)), int(f["id"]))
+        self.form.onto.currentIndexChanged.connect(self.schedule)
         self.form.operation.addItems([label for label, _, _ in OPERATIONS])
         self.form.operation.setCurrentIndex([op for _, op, _ in OPERATIONS].index(operation))
         self.form.operation.currentIndexChanged.connect(self.operation_changed)
@@ -97,16 +105,17 @@ class FeatureGroupPanel:
 
     def step(self):
         translation = [getattr(self.form, name).value() for name in ("offsetX", "offsetY", "offsetZ")]
-        return group_step(self.operation()[1], self.members(), translation, self.form.rotation.value())
+        return group_step(self.operation()[1], self.members(), translation, self.form.rotation.value(),
+                          self.form.onto.itemData(self.form.onto.currentIndex()))
 
     def unchanged(self):
         step = self.step()
         return not step["feature_ids"] or (
-            step["op"] == "move" and not any(step["translation"]) and not step["rotation"])
+            step["op"] == "move" and not any(step["translation"]) and not step["rotation"] and "onto" not in step)
 
     def operation_changed(self, index):
         placing = OPERATIONS[index][1] != "delete"
-        for name in ("offsetX", "offsetY", "offsetZ", "rotation"):
+        for name in ("onto", "offsetX", "offsetY", "offsetZ", "rotation"):
             getattr(self.form, name).setEnabled(placing)
         self.schedule()
 

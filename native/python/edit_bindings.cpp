@@ -213,12 +213,12 @@ void bind_structure_edits(py::module_& m) {
     return [function](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F,
                       std::vector<int> labels, const std::vector<std::string>& types,
                       const std::vector<py::dict>& params, const std::vector<py::dict>& adjacency,
-                      std::vector<int> features, const Eigen::Vector3d& translation, double rotation,
+                      std::vector<int> features, const Eigen::Vector3d& translation, double rotation, int onto,
                       double distance_tolerance, bool remesh, std::vector<double> target_edge_lengths) {
       const std::vector<Surface> surfaces = surfaces_from(types, params);
       const TriangleMesh mesh = mesh_from(V, F);
       const std::vector<FeatureAdjacency> graph = adjacency_from(adjacency);
-      const Placement placement{translation, rotation};
+      const Placement placement{translation, rotation, onto};
       const EditOptions options = structure_options(distance_tolerance, remesh, std::move(target_edge_lengths));
       CopyResult result;
       {
@@ -237,7 +237,8 @@ void bind_structure_edits(py::module_& m) {
            std::tuple<const char*, Placing, const char*>{
                "copy_features", &copy_features,
                "Copies `features` (a group on host planes), turned by `rotation` (radians) about its first host's "
-               "normal through its centroid and moved by `translation` (along the hosts): dict(V, F, labels, params "
+               "normal through its centroid and moved by `translation` (along the hosts; onto: another plane to go to): "
+               "dict(V, F, labels, params "
                "(every feature's, the copies' appended), copies (new id per feature given), hosts, vertex_deviation, "
                "target_edge_lengths, remeshing_problem). Raises EditConflict naming what the new place conflicts "
                "with."},
@@ -247,7 +248,8 @@ void bind_structure_edits(py::module_& m) {
                "their old place first; the features keep their ids (copies: the ids given)."}})
     m.def(name, placing(function), py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"),
           py::arg("params"), py::arg("adjacency"), py::arg("features"), py::arg("translation"),
-          py::arg("rotation") = 0.0, py::kw_only(), py::arg("distance_tolerance") = 0.0, py::arg("remesh") = true,
+          py::arg("rotation") = 0.0, py::kw_only(), py::arg("onto") = -1, py::arg("distance_tolerance") = 0.0,
+          py::arg("remesh") = true,
           py::arg("target_edge_lengths") = std::vector<double>(), doc);
 }
 

@@ -57,11 +57,13 @@ bool overlaps(const std::array<Eigen::Vector2d, 3>& t, const Polygon& polygon) {
   return false;
 }
 
-// Throws EditConflict unless `motion` keeps plane `host` in place, its outside too.
-void check_keeps_plane(const Surface& host, int id, const Eigen::Isometry3d& motion, double diagonal) {
+// Throws EditConflict unless `motion` carries plane `from` onto plane `to` (feature `id`; the same
+// plane for a group that stays on its host).
+void check_carries_plane(const Surface& from, const Surface& to, int id, const Eigen::Isometry3d& motion,
+                         double diagonal) {
   // Rounding of a translation given along the plane: a billionth of the part, and of a radian.
-  const double off = std::abs((motion * host.point - host.point).dot(host.axis));
-  if ((motion.linear() * host.axis - host.axis).norm() > 1e-9 || off > 1e-9 * diagonal)
+  const double off = std::abs((motion * from.point - to.point).dot(to.axis));
+  if (std::abs((motion.linear() * from.axis).dot(to.axis)) < 1.0 - 1e-9 || off > 1e-9 * diagonal)
     throw EditConflict("the new place is off the plane of feature " + std::to_string(id) +
                        ": translate along that plane and turn about its normal only");
 }
@@ -88,6 +90,18 @@ std::vector<int> faces_to_open(const TriangleMesh& mesh, const std::vector<int>&
   return {opened.begin(), opened.end()};
 }
 
+// The outward normal of plane `feature` (its faces labelled so in `labels`).
+Eigen::Vector3d outward_normal(const TriangleMesh& mesh, const std::vector<int>& labels, int feature,
+                               const Surface& plane) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (labels[f] == feature) {
+      const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
+      sum += (b - a).cross(c - a);
+    }
+  return sum.dot(plane.axis) >= 0.0 ? plane.axis : Eigen::Vector3d(-plane.axis);
+}
+
 // The rigid motion of `placement` for the group labelled `group`, whose first host is `host`.
 Eigen::Isometry3d placement_motion(const TriangleMesh& mesh, const std::vector<int>& labels, int group,
                                    const std::vector<Surface>& surfaces, int host, const Placement& placement) {
@@ -103,10 +117,24 @@ Eigen::Isometry3d placement_motion(const TriangleMesh& mesh, const std::vector<i
   }
   for (int v : vertices) centroid += mesh.V.row(v).transpose();
   centroid /= static_cast<double>(std::max<size_t>(vertices.size(), 1));
-  const Eigen::Vector3d normal = outward.dot(surfaces[host].axis) >= 0.0 ? surfaces[host].axis : -surfaces[host].axis;
+  const Surface& plane = surfaces[host];
+  const Eigen::Vector3d normal = outward.dot(plane.axis) >= 0.0 ? plane.axis : -plane.axis;
   Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
-  motion.linear() = Eigen::AngleAxisd(placement.rotation, normal).toRotationMatrix();
-  motion.translation() = centroid - motion.linear() * centroid + placement.translation;
+  if (placement.onto < 0 || placement.onto == host) {
+    motion.linear() = Eigen::AngleAxisd(placement.rotation, normal).toRotationMatrix();
+    motion.translation() = centroid - motion.linear() * centroid + placement.translation;
+    return motion;
+  }
+  // Onto another plane: the centre on the host goes to the nearest point of the target's plane,
+  // the host's outward normal onto the target's.
+  const Surface& target = surfaces[placement.onto];
+  const Eigen::Vector3d to = outward_normal(mesh, labels, placement.onto, target);
+  const Eigen::Vector3d from = centroid - (centroid - plane.point).dot(plane.axis) * plane.axis;
+  const Eigen::Vector3d anchor = from - (from - target.point).dot(target.axis) * target.axis;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(placement.rotation, to).toRotationMatrix() *
+                               Eigen::Quaterniond::FromTwoVectors(normal, to).toRotationMatrix();
+  motion.linear() = turn;
+  motion.translation() = anchor + placement.translation - turn * from;
   return motion;
 }
 
@@ -130,11 +158,23 @@ Decal lift_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
   decal.hosts = gap_hosts(mesh, group_labels, n, surfaces, loops);
   const double diagonal = bounding_box_diagonal(mesh);
   decal.motion = placement_motion(mesh, group_labels, n, surfaces, decal.hosts.front(), placement);
-  for (int h : decal.hosts) {
+  for (int h : decal.hosts)
     if (surfaces[h].type != SurfaceType::Plane)
       throw EditConflict("the group sits on feature " + std::to_string(h) + ", a " + surface_type_name(surfaces[h].type) +
                          ": a group is copied and moved on planes only");
-    check_keeps_plane(surfaces[h], h, decal.motion, diagonal);
+  if (placement.onto >= 0 && placement.onto != decal.hosts.front()) {
+    if (placement.onto >= n) throw std::invalid_argument("the layer has no feature " + std::to_string(placement.onto));
+    if (surfaces[placement.onto].type != SurfaceType::Plane)
+      throw EditConflict("feature " + std::to_string(placement.onto) + " is a " +
+                         surface_type_name(surfaces[placement.onto].type) + ": a group goes onto a plane only");
+    if (std::any_of(decal.hosts.begin(), decal.hosts.end(), [&](int h) { return h != decal.hosts.front(); }))
+      throw EditConflict("the group sits on several faces (a through hole): it moves along them only");
+    if (decal.member[placement.onto]) throw EditConflict("feature " + std::to_string(placement.onto) + " is in the group");
+  }
+  for (int& h : decal.hosts) {
+    const int to = placement.onto >= 0 ? placement.onto : h;
+    check_carries_plane(surfaces[h], surfaces[to], to, decal.motion, diagonal);
+    h = to;
   }
   const MeshTopology topology(mesh);
   std::vector<int> index(mesh.num_vertices(), -1);

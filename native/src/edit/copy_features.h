@@ -32,9 +32,14 @@ struct CopyResult {
 // Where a copy goes: turned by `rotation` (radians, counter-clockwise about the outward normal of
 // the group's first host plane) about the line along that normal through the centroid of the
 // group's vertices, then moved by `translation`, which must lie along the host planes.
+//
+// With `onto` (a plane feature), the group goes onto that face instead (a group on one host only):
+// its host's outward normal turned onto that face's, its centre (on its host) onto the nearest
+// point of that face's plane, then turned and moved along it as above.
 struct Placement {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   double rotation = 0.0;
+  int onto = -1;
 };
 
 // Copies `features` (a group whose border loops each lie on one host plane, as delete_features
