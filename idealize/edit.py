@@ -124,7 +124,8 @@ def copy(layer, feature_ids, translation, rotation=None, onto=None, remesh=True)
     as a decal: its triangles and surfaces are carried rigidly, the host opens a gap of the group's
     outline there and the ring around it is triangulated and remeshed. `translation` (3 numbers)
     must lie along the host planes; `rotation` (degrees) turns the copy counter-clockwise about
-    the host's outward normal through the group's centre first. With `onto` (a plane feature's id),
+    the host's outward normal through the group's centre first (a group on a cylinder: about the
+    cylinder's axis, and the translation along it). With `onto` (a plane feature's id),
     the copy goes onto that face instead: its centre to the nearest point of that plane, facing out
     of it, then turned and moved along it. The original stays; the copies get
     new ids after the layer's (``layer.copies``: per id given, its copy's id; ``layer.created`` flags
@@ -218,12 +219,12 @@ def set_depth(layer, hole_feature_id, depth, entry=None, remesh=True):
 
 
 def _island(layer, ids):
-    """Whether features `ids` are a whole feature group on host planes."""
+    """Whether features `ids` are a whole feature group on host planes or cylinders."""
     for f in ids:
         _feature(layer, f)
     group = feature_group(layer, ids[0])
     return (sorted(set(ids)) == group["members"] and bool(group["hosts"])
-            and all(layer.features[h]["type"] == "plane" for h in group["hosts"]))
+            and all(layer.features[h]["type"] in ("plane", "cylinder") for h in group["hosts"]))
 
 
 def _carried(layer, ids, translation, rotation, onto, remesh):

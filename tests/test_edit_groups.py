@@ -1,6 +1,9 @@
-"""Structure-altering editing, first part (issue 52): feature groups from the mesh's border loops,
-and deleting a group with its gaps closed on the faces around it."""
+"""Structure-altering editing (issue 52): feature groups from the mesh's border loops; deleting a
+group with its gaps closed on the faces around it; copying and moving it on its host planes or
+cylinders, or onto another plane; a hole made through and blind again. Every result against the
+part built edited in FreeCAD."""
 import copy
+import math
 
 import numpy as np
 import pytest
@@ -320,3 +323,33 @@ def test_a_boss_goes_onto_the_plate_bottom(wide_boss):
     with pytest.raises(edit.EditConflict, match="reaches feature"):  # a side face 10 high: the boss does not fit
         edit.copy(layer, group["members"], (0, 0, 0), onto=[f["id"] for f in layer.features if f["type"] == "plane"
                                                           and abs(f["params"]["normal"][1]) > 0.999][0])
+
+
+def radial_holes(holes):
+    """The shaft (r 15, 60 long) with radial through holes (r 4) at (height, angle in degrees)."""
+    FreeCAD, Part, _ = shapes.freecad()
+    solid = Part.makeCylinder(15, 60)
+    for z, angle in holes:
+        d = FreeCAD.Vector(math.cos(math.radians(angle)), math.sin(math.radians(angle)), 0)
+        solid = solid.cut(Part.makeCylinder(4, 40, FreeCAD.Vector(0, 0, z) - d * 20, d))
+    return solid
+
+
+def test_a_radial_hole_is_copied_and_turned_round_the_shaft(shaft):
+    layer, _ = shaft
+    hole, = of_type(layer, "cylinder", radius=4.0)
+    outside, = of_type(layer, "cylinder", radius=15.0)
+    before = idealize.make_solid(layer).volume - radial_holes([(30, 90)]).Volume  # the B-rep's own error
+    copied = edit.copy(layer, [hole], (0, 0, 15), rotation=90)
+    made = idealize.make_solid(copied)
+    assert made.solid and made.faces == 5 and copied.changed == sorted([outside, copied.copies[0]])
+    assert made.volume - before == pytest.approx(radial_holes([(30, 90), (45, 180)]).Volume, rel=1e-4)
+    axis = copied.features[copied.copies[0]]["params"]["axis"]
+    assert abs(axis[0]) == pytest.approx(1.0, abs=1e-9)  # turned a quarter from the y axis
+    assert well_shaped(copied) >= 0.99
+    moved = edit.move(layer, [hole], (0, 0, -12), rotation=45)
+    assert idealize.make_solid(moved).volume - before == pytest.approx(radial_holes([(18, 135)]).Volume, rel=1e-4)
+    with pytest.raises(edit.EditConflict, match="cut through the part"):  # across the hole itself
+        edit.copy(layer, [hole], (0, 0, 0), rotation=90)
+    with pytest.raises(edit.EditConflict, match="off the cylinder"):
+        edit.copy(layer, [hole], (1, 0, 0))

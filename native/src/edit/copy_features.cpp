@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -57,27 +58,39 @@ bool overlaps(const std::array<Eigen::Vector2d, 3>& t, const Polygon& polygon) {
   return false;
 }
 
-// Throws EditConflict unless `motion` carries plane `from` onto plane `to` (feature `id`; the same
-// plane for a group that stays on its host).
-void check_carries_plane(const Surface& from, const Surface& to, int id, const Eigen::Isometry3d& motion,
-                         double diagonal) {
-  // Rounding of a translation given along the plane: a billionth of the part, and of a radian.
-  const double off = std::abs((motion * from.point - to.point).dot(to.axis));
-  if (std::abs((motion.linear() * from.axis).dot(to.axis)) < 1.0 - 1e-9 || off > 1e-9 * diagonal)
-    throw EditConflict("the new place is off the plane of feature " + std::to_string(id) +
-                       ": translate along that plane and turn about its normal only");
+// Throws EditConflict unless `motion` carries host `from` (a plane or a cylinder) onto `to`
+// (feature `id`; the same surface for a group that stays on its host).
+void check_carries_host(const Surface& from, const Surface& to, int id, const Eigen::Isometry3d& motion,
+                        double diagonal) {
+  // Rounding of a placement given along the host: a billionth of the part, and of a radian.
+  const double tolerance = 1e-9 * diagonal;
+  const Eigen::Vector3d axis = motion.linear() * from.axis, point = motion * from.point;
+  bool on = std::abs(axis.dot(to.axis)) >= 1.0 - 1e-9;
+  if (to.type == SurfaceType::Plane)
+    on &= std::abs((point - to.point).dot(to.axis)) <= tolerance;
+  else
+    on &= axial_coordinates(to.point, to.axis, point).distance <= tolerance;
+  if (!on)
+    throw EditConflict("the new place is off the " + std::string(surface_type_name(to.type)) + " of feature " +
+                       std::to_string(id) + (to.type == SurfaceType::Plane
+                                                 ? ": translate along that plane and turn about its normal only"
+                                                 : ": translate along its axis and turn about it only"));
 }
 
 // The host faces (labelled `host` in `labels`) that the new outline `outline` (chart of the host)
 // covers, and one ring of host faces around them, so that the gap's border keeps a triangle's
-// width from the outline. `chart_of_vertex`: every vertex's point in the host's chart.
+// width from the outline. `chart_of_vertex`: every vertex's point in the host's chart; triangles
+// with an edge longer than `widest` there are skipped.
 std::vector<int> faces_to_open(const TriangleMesh& mesh, const std::vector<int>& labels, int host,
                                const std::vector<int>& host_faces, const Polygon& outline,
-                               const std::vector<Eigen::Vector2d>& chart_of_vertex, const MeshTopology& topology) {
+                               const std::vector<Eigen::Vector2d>& chart_of_vertex, double widest,
+                               const MeshTopology& topology) {
   std::set<int> covered;
   for (int f : host_faces) {
     const std::array<Eigen::Vector2d, 3> t{chart_of_vertex[mesh.F(f, 0)], chart_of_vertex[mesh.F(f, 1)],
                                            chart_of_vertex[mesh.F(f, 2)]};
+    // A cylinder's triangle across the chart's seam (half a turn from the outline) spans it.
+    if ((t[1] - t[0]).norm() > widest || (t[2] - t[1]).norm() > widest || (t[0] - t[2]).norm() > widest) continue;
     if (overlaps(t, outline)) covered.insert(f);
   }
   std::set<int> opened = covered;
@@ -120,6 +133,11 @@ Eigen::Isometry3d placement_motion(const TriangleMesh& mesh, const std::vector<i
   const Surface& plane = surfaces[host];
   const Eigen::Vector3d normal = outward.dot(plane.axis) >= 0.0 ? plane.axis : -plane.axis;
   Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  if (plane.type == SurfaceType::Cylinder) {  // turned about the cylinder's axis
+    motion.linear() = Eigen::AngleAxisd(placement.rotation, plane.axis).toRotationMatrix();
+    motion.translation() = plane.point - motion.linear() * plane.point + placement.translation;
+    return motion;
+  }
   if (placement.onto < 0 || placement.onto == host) {
     motion.linear() = Eigen::AngleAxisd(placement.rotation, normal).toRotationMatrix();
     motion.translation() = centroid - motion.linear() * centroid + placement.translation;
@@ -158,11 +176,11 @@ Decal lift_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
   decal.hosts = gap_hosts(mesh, group_labels, n, surfaces, loops);
   const double diagonal = bounding_box_diagonal(mesh);
   decal.motion = placement_motion(mesh, group_labels, n, surfaces, decal.hosts.front(), placement);
-  for (int h : decal.hosts)
-    if (surfaces[h].type != SurfaceType::Plane)
-      throw EditConflict("the group sits on feature " + std::to_string(h) + ", a " + surface_type_name(surfaces[h].type) +
-                         ": a group is copied and moved on planes only");
   if (placement.onto >= 0 && placement.onto != decal.hosts.front()) {
+    for (int h : decal.hosts)
+      if (surfaces[h].type != SurfaceType::Plane)
+        throw EditConflict("the group sits on feature " + std::to_string(h) + ", a " +
+                           surface_type_name(surfaces[h].type) + ": it goes onto another face from a plane only");
     if (placement.onto >= n) throw std::invalid_argument("the layer has no feature " + std::to_string(placement.onto));
     if (surfaces[placement.onto].type != SurfaceType::Plane)
       throw EditConflict("feature " + std::to_string(placement.onto) + " is a " +
@@ -173,7 +191,7 @@ Decal lift_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
   }
   for (int& h : decal.hosts) {
     const int to = placement.onto >= 0 ? placement.onto : h;
-    check_carries_plane(surfaces[h], surfaces[to], to, decal.motion, diagonal);
+    check_carries_host(surfaces[h], surfaces[to], to, decal.motion, diagonal);
     h = to;
   }
   const MeshTopology topology(mesh);
@@ -237,8 +255,6 @@ void place_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
   std::vector<std::vector<int>> host_faces(n);
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (labels[f] >= 0) host_faces[labels[f]].push_back(f);
-  std::vector<int> all(placed.num_vertices());
-  for (int v = 0; v < placed.num_vertices(); ++v) all[v] = v;
   std::vector<char> removed(mesh.num_faces(), 0);
   std::vector<std::array<int, 3>> faces;
   for (size_t i = 0; i < decal.loops.size(); ++i) {
@@ -247,8 +263,14 @@ void place_decal(const TriangleMesh& mesh, const std::vector<int>& labels, const
     std::vector<int> outline_ids;
     for (int v : decal.loops[i]) outline_ids.push_back(shift + v);
     const Polygon outline = loop_chart(placed, outline_ids, host_faces[h], surfaces[h], winds);
-    const Polygon chart_of_vertex = loop_chart(placed, all, host_faces[h], surfaces[h], winds);
-    const std::vector<int> open = faces_to_open(mesh, labels, h, host_faces[h], outline, chart_of_vertex, topology);
+    const bool round = surfaces[h].type == SurfaceType::Cylinder;
+    double middle = 0.0;  // the outline's mean angle on a cylinder
+    for (const Eigen::Vector2d& p : outline) middle += p.x();
+    middle /= static_cast<double>(outline.size()) * (round ? surfaces[h].radius : 1.0);
+    const Polygon chart_of_vertex = points_chart(placed, host_faces[h], surfaces[h], middle);
+    const double widest = round ? M_PI * surfaces[h].radius : std::numeric_limits<double>::infinity();
+    const std::vector<int> open =
+        faces_to_open(mesh, labels, h, host_faces[h], outline, chart_of_vertex, widest, topology);
     if (open.empty())
       throw EditConflict("the group's new place is not on feature " + std::to_string(h) + ": it would leave that face");
     std::vector<int> gap_labels = labels;

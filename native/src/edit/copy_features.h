@@ -1,4 +1,4 @@
-// Copying a feature group to another place on its host planes (thesis 6.2.2, "copy"; with
+// Copying a feature group to another place on its host planes or cylinders (thesis 6.2.2, "copy"; with
 // delete_features, "move"). The group travels as a decal, the thesis's texture idea: its triangles
 // and surfaces are carried rigidly, the host opens a gap of the group's outline at the new place,
 // and the ring between that outline and the host's triangles around it is triangulated and
@@ -31,7 +31,8 @@ struct CopyResult {
 
 // Where a copy goes: turned by `rotation` (radians, counter-clockwise about the outward normal of
 // the group's first host plane) about the line along that normal through the centroid of the
-// group's vertices, then moved by `translation`, which must lie along the host planes.
+// group's vertices, then moved by `translation`, which must lie along the host planes. A group on
+// a cylinder turns about the cylinder's axis instead, and moves along it.
 //
 // With `onto` (a plane feature), the group goes onto that face instead (a group on one host only):
 // its host's outward normal turned onto that face's, its centre (on its host) onto the nearest
@@ -42,8 +43,8 @@ struct Placement {
   int onto = -1;
 };
 
-// Copies `features` (a group whose border loops each lie on one host plane, as delete_features
-// requires) to `placement`. `mesh`, `labels`, `surfaces`, `adjacency`, `options`: as
+// Copies `features` (a group whose border loops each lie on one host plane or cylinder, as
+// delete_features requires) to `placement`. `mesh`, `labels`, `surfaces`, `adjacency`, `options`: as
 // delete_features. Throws EditConflict, naming the features, when the new place is off a host
 // plane, reaches the host's edge or another feature, or overlaps the group itself;
 // std::invalid_argument for ids that name no feature. The copy's surfaces are the originals

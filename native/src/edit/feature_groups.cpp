@@ -17,47 +17,81 @@ Eigen::Vector3d face_normal_of(const TriangleMesh& mesh, int f) {
 
 }  // namespace
 
-std::vector<Eigen::Vector2d> loop_chart(const TriangleMesh& mesh, const std::vector<int>& loop,
-                                        const std::vector<int>& region_faces, const Surface& surface, bool& winds) {
-  winds = false;
-  // A plane's (u, v) has u x v along the region's outward normal; a cylinder's chart has as its
-  // normal (the angle's direction x the axis) the radial direction, flipped when the region faces
-  // the axis (a hole's wall).
-  std::vector<Eigen::Vector2d> out;
+namespace {
+
+// A chart of a plane or a cylinder: its frame about the axis, and the side the region faces (+1:
+// along a plane's axis, away from a cylinder's axis). A plane's (u, v) = (e1, side e2) turns about
+// the region's outward normal; a cylinder's (radius angle, side height), the angle growing along
+// axis x radial, has as its normal (the angle's direction x the axis) the radial direction, times
+// side: also the region's outward normal.
+struct Chart {
   Eigen::Vector3d e1, e2;
-  orthonormal_frame(surface.axis, e1, e2);
-  if (surface.type == SurfaceType::Plane) {
-    Eigen::Vector3d outward = Eigen::Vector3d::Zero();
-    for (int f : region_faces) outward += face_normal_of(mesh, f);
-    const double side = outward.dot(surface.axis) >= 0.0 ? 1.0 : -1.0;
-    for (int v : loop) {
-      const Eigen::Vector3d q = mesh.V.row(v).transpose() - surface.point;
-      out.emplace_back(q.dot(e1), side * q.dot(e2));  // (e1, ±e2) turns about ±axis
-    }
-    return out;
-  }
-  // Cylinder: whether the region faces away from the axis (a boss) or towards it (a hole's wall).
+  double side = 1.0;
+};
+
+Chart chart_of(const TriangleMesh& mesh, const std::vector<int>& region_faces, const Surface& surface) {
+  Chart chart;
+  orthonormal_frame(surface.axis, chart.e1, chart.e2);
   double facing = 0.0;
   for (int f : region_faces) {
+    if (surface.type == SurfaceType::Plane) {
+      facing += face_normal_of(mesh, f).dot(surface.axis);
+      continue;
+    }
     const Eigen::Vector3d centroid =
         (mesh.V.row(mesh.F(f, 0)) + mesh.V.row(mesh.F(f, 1)) + mesh.V.row(mesh.F(f, 2))).transpose() / 3.0;
     facing += face_normal_of(mesh, f).dot(axial_coordinates(surface.point, surface.axis, centroid).radial);
   }
-  const double side = facing >= 0.0 ? 1.0 : -1.0;
-  auto wrapped = [](double step) { return step - 2.0 * M_PI * std::round(step / (2.0 * M_PI)); };  // the shorter way
+  chart.side = facing >= 0.0 ? 1.0 : -1.0;
+  return chart;
+}
+
+double wrapped(double angle) { return angle - 2.0 * M_PI * std::round(angle / (2.0 * M_PI)); }  // in [-pi, pi]
+
+}  // namespace
+
+std::vector<Eigen::Vector2d> loop_chart(const TriangleMesh& mesh, const std::vector<int>& loop,
+                                        const std::vector<int>& region_faces, const Surface& surface, bool& winds) {
+  winds = false;
+  const Chart c = chart_of(mesh, region_faces, surface);
+  std::vector<Eigen::Vector2d> out;
+  if (surface.type == SurfaceType::Plane) {
+    for (int v : loop) {
+      const Eigen::Vector3d q = mesh.V.row(v).transpose() - surface.point;
+      out.emplace_back(q.dot(c.e1), c.side * q.dot(c.e2));
+    }
+    return out;
+  }
+  // A cylinder's angle unwrapped along the loop.
   double unwrapped = 0.0, previous = 0.0, turned = 0.0;
   for (size_t i = 0; i <= loop.size(); ++i) {  // the last step closes the loop
     const Eigen::Vector3d q = mesh.V.row(loop[i % loop.size()]).transpose() - surface.point;
-    const double a = std::atan2(q.dot(e2), q.dot(e1));
+    const double a = std::atan2(q.dot(c.e2), q.dot(c.e1));
     const double step = i == 0 ? a : wrapped(a - previous);
     unwrapped += step;
     if (i > 0) turned += step;
     previous = a;
-    // (angle, height): the angle grows along e_angle = axis x radial, and e_angle x axis = radial.
-    if (i < loop.size()) out.emplace_back(surface.radius * unwrapped, side * q.dot(surface.axis));
+    if (i < loop.size()) out.emplace_back(surface.radius * unwrapped, c.side * q.dot(surface.axis));
   }
   // Closed up, the angle has turned by a whole number of turns: any but zero winds round the axis.
   winds = std::abs(turned) > M_PI;
+  return out;
+}
+
+std::vector<Eigen::Vector2d> points_chart(const TriangleMesh& mesh, const std::vector<int>& region_faces,
+                                          const Surface& surface, double near) {
+  const Chart c = chart_of(mesh, region_faces, surface);
+  std::vector<Eigen::Vector2d> out;
+  out.reserve(mesh.num_vertices());
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const Eigen::Vector3d q = mesh.V.row(v).transpose() - surface.point;
+    if (surface.type == SurfaceType::Plane) {
+      out.emplace_back(q.dot(c.e1), c.side * q.dot(c.e2));
+    } else {
+      const double angle = near + wrapped(std::atan2(q.dot(c.e2), q.dot(c.e1)) - near);
+      out.emplace_back(surface.radius * angle, c.side * q.dot(surface.axis));
+    }
+  }
   return out;
 }
 

@@ -48,6 +48,12 @@ bool is_inner_loop(const TriangleMesh& mesh, const std::vector<int>& loop, const
 std::vector<Eigen::Vector2d> loop_chart(const TriangleMesh& mesh, const std::vector<int>& loop,
                                         const std::vector<int>& region_faces, const Surface& surface, bool& winds);
 
+// Every vertex of `mesh` in the chart loop_chart uses for `surface` and `region_faces`; on a
+// cylinder, each angle taken within half a turn of `near` (radians, in that chart: a loop chart's
+// u over the radius), so that the points near a loop agree with its chart.
+std::vector<Eigen::Vector2d> points_chart(const TriangleMesh& mesh, const std::vector<int>& region_faces,
+                                          const Surface& surface, double near);
+
 struct FeatureGroup {
   std::vector<int> members;  // the group's features, sorted (the seed among them)
   std::vector<int> hosts;    // the planes and cylinders that carry it on inner loops, sorted
