@@ -19,7 +19,8 @@ from ..brep import make_solid
 UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                        "Resources", "ui", "PushPull.ui")
 # What each type's parameters are called in the panel: (label, report name, shown as degrees).
-PARAMETERS = {"cylinder": [("Radius", "radius", False)], "sphere": [("Radius", "radius", False)],
+PARAMETERS = {"cylinder": [("Radius", "radius", False), ("Hole depth (through past the far side)", "depth", False)],
+              "sphere": [("Radius", "radius", False)],
               "torus": [("Major radius", "major", False), ("Minor radius", "minor", False)],
               "cone": [("Half angle", "half_angle", True)]}
 # The preview waits for the typing to pause: a quarter second, about where a user notices a lag.
@@ -28,7 +29,10 @@ PREVIEW_DELAY_MS = 250
 
 def edit_step(feature, parameter, value, keep):
     """The edit (a dict for idealize.edit.apply) the panel's values describe: "offset" pushes or
-    pulls by `value`, a parameter (its report name) takes `value` (degrees for a half angle)."""
+    pulls by `value`, "depth" gives a hole that depth, a parameter (its report name) takes `value`
+    (degrees for a half angle)."""
+    if parameter == "depth":
+        return {"op": "set_depth", "hole_feature_id": int(feature["id"]), "depth": float(value)}
     if parameter == "offset":
         return {"op": "push_pull", "feature_id": int(feature["id"]), "distance": float(value), "keep": dict(keep)}
     if parameter == "half_angle":
@@ -138,16 +142,20 @@ class NormalDragger:
         self.node.addChild(transform)
         self.node.addChild(self.dragger)
         self.quiet = False
+        self.placed = 0.0
         self.sensor = coin.SoFieldSensor(self._moved, None)
         self.sensor.attach(self.dragger.translation)
         view.getSceneGraph().addChild(self.node)
 
     def _moved(self, data, sensor):
-        if not self.quiet:
-            self.changed(round(self.dragger.translation.getValue()[0] * self.size, 4))
+        # The sensor fires later, from the event loop: a position that show() set is not a drag.
+        distance = round(self.dragger.translation.getValue()[0] * self.size, 4)
+        if not self.quiet and distance != self.placed:
+            self.changed(distance)
 
     def show(self, distance):
         self.quiet = True
+        self.placed = round(distance, 4)
         self.dragger.translation.setValue(distance / self.size, 0.0, 0.0)
         self.quiet = False
 
@@ -223,7 +231,7 @@ class PushPullPanel:
         _, name, degrees = self.choices[index]
         if self.dragger is not None:
             self.dragger.show(0.0)
-        value = 0.0 if name == "offset" else float(self.feature["params"][name])
+        value = self.current(name)
         self.form.value.blockSignals(True)
         self.form.value.setSuffix(" °" if degrees else " mm")
         self.form.value.setValue(math.degrees(value) if degrees else value)
@@ -235,10 +243,23 @@ class PushPullPanel:
     def step(self):
         return edit_step(self.feature, self.parameter()[1], self.form.value.value(), self.keep())
 
+    def current(self, name):
+        """The value of `name` before the edit: 0 for an offset, a cylinder's length along its axis
+        for a hole's depth (to the floor, or through), else the parameter."""
+        if name == "offset":
+            return 0.0
+        if name == "depth":
+            params = self.feature["params"]
+            axis = np.asarray(params["axis"], dtype=np.float64)
+            F = np.asarray(self.layer.mesh.faces)[np.asarray(self.layer.labels) == self.feature["id"]]
+            heights = self.layer.idealized_vertices[np.unique(F)] @ axis
+            return round(float(heights.max() - heights.min()), 6) if len(heights) else 0.0
+        return float(self.feature["params"][name])
+
     def unchanged(self):
         _, name, degrees = self.parameter()
         value = self.form.value.value()
-        current = 0.0 if name == "offset" else float(self.feature["params"][name])
+        current = self.current(name)
         return value == (math.degrees(current) if degrees else current)
 
     # --- preview
