@@ -24,6 +24,25 @@ _SPEC.loader.exec_module(gui_driver)
 HELPERS = r'''
 
 
+def wait(seconds):
+    """Let the event loop run (timers, the previews) for `seconds`."""
+    import time
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end:
+        Gui.updateGui()
+        time.sleep(0.02)
+
+
+def click_ok():
+    """Press OK in the open task dialog, as a user does."""
+    from PySide import QtGui
+    for box in Gui.getMainWindow().findChildren(QtGui.QDialogButtonBox):
+        ok = box.button(QtGui.QDialogButtonBox.Ok)
+        if ok is not None and ok.isVisible():
+            ok.click()
+            return
+
+
 def ensure_link():
     """Point <user Mod>/Idealize at the checkout under test; True when it had to change."""
     mod = os.path.join(App.getUserAppDataDir(), "Mod")

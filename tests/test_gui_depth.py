@@ -11,14 +11,6 @@ import pytest
 import test_gui as gui
 
 DRIVER = gui.HELPERS + r'''
-import time
-
-
-def wait(seconds):
-    end = time.perf_counter() + seconds
-    while time.perf_counter() < end:
-        Gui.updateGui()
-        time.sleep(0.02)
 
 
 def run():
@@ -55,11 +47,7 @@ def run():
     value.setValue(25.0)
     wait(2.0)
     result["preview"] = form.findChild(QtGui.QLabel, "status").text()
-    for box in Gui.getMainWindow().findChildren(QtGui.QDialogButtonBox):
-        ok = box.button(QtGui.QDialogButtonBox.Ok)
-        if ok is not None and ok.isVisible():
-            ok.click()
-            break
+    click_ok()
     wait(1.0)
     result["through"] = {"volume": solid.Shape.Volume, "faces": len(solid.Shape.Faces), "valid": solid.Shape.isValid(),
                          "undo_name": doc.UndoNames[0] if doc.UndoNames else None}

@@ -10,15 +10,6 @@ import pytest
 import test_gui as gui
 
 DRIVER = gui.HELPERS + r'''
-import time
-
-
-def wait(seconds):
-    """Let the event loop run (timers, the preview) for `seconds`."""
-    end = time.perf_counter() + seconds
-    while time.perf_counter() < end:
-        Gui.updateGui()
-        time.sleep(0.02)
 
 
 def layer_state(doc, layer, solid):
@@ -87,11 +78,7 @@ def run():
     form.findChild(QtGui.QDoubleSpinBox, "value").setValue(5.0)
     wait(1.5)
     undo_before = len(doc.UndoNames)
-    for box in Gui.getMainWindow().findChildren(QtGui.QDialogButtonBox):
-        ok = box.button(QtGui.QDialogButtonBox.Ok)
-        if ok is not None and ok.isVisible():
-            ok.click()
-            break
+    click_ok()
     wait(0.5)
     result["after"] = layer_state(doc, layer, solid)
     result["after"].update({"dialog_open": bool(Gui.Control.activeDialog()), "undo_steps": len(doc.UndoNames) - undo_before,

@@ -13,29 +13,12 @@ import pytest
 import test_gui as gui
 
 DRIVER = gui.HELPERS + r'''
-import time
-
-
-def wait(seconds):
-    end = time.perf_counter() + seconds
-    while time.perf_counter() < end:
-        Gui.updateGui()
-        time.sleep(0.02)
 
 
 def state(doc, layer, solid):
     table = json.loads(layer.FeatureTable)
     return {"features": len(table["features"]), "edits": len(json.loads(layer.Edits)) if layer.Edits else 0,
             "volume": solid.Shape.Volume, "valid": solid.Shape.isValid(), "faces": len(solid.Shape.Faces)}
-
-
-def click_ok():
-    from PySide import QtGui
-    for box in Gui.getMainWindow().findChildren(QtGui.QDialogButtonBox):
-        ok = box.button(QtGui.QDialogButtonBox.Ok)
-        if ok is not None and ok.isVisible():
-            ok.click()
-            return
 
 
 def select_boss_wall(doc, layer):

@@ -103,41 +103,23 @@ std::vector<int> faces_to_open(const TriangleMesh& mesh, const std::vector<int>&
   return {opened.begin(), opened.end()};
 }
 
-// The outward normal of plane `feature` (its faces labelled so in `labels`).
-Eigen::Vector3d outward_normal(const TriangleMesh& mesh, const std::vector<int>& labels, int feature,
-                               const Surface& plane) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    if (labels[f] == feature) {
-      const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-      sum += (b - a).cross(c - a);
-    }
-  return sum.dot(plane.axis) >= 0.0 ? plane.axis : Eigen::Vector3d(-plane.axis);
-}
-
 // The rigid motion of `placement` for the group labelled `group`, whose first host is `host`.
 Eigen::Isometry3d placement_motion(const TriangleMesh& mesh, const std::vector<int>& labels, int group,
                                    const std::vector<Surface>& surfaces, int host, const Placement& placement) {
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero(), outward = Eigen::Vector3d::Zero();
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   std::set<int> vertices;
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    if (labels[f] == group)
-      for (int c = 0; c < 3; ++c) vertices.insert(mesh.F(f, c));
-    if (labels[f] == host) {
-      const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-      outward += (b - a).cross(c - a);
-    }
-  }
+  for (int f : faces_labelled(labels, group))
+    for (int c = 0; c < 3; ++c) vertices.insert(mesh.F(f, c));
   for (int v : vertices) centroid += mesh.V.row(v).transpose();
   centroid /= static_cast<double>(std::max<size_t>(vertices.size(), 1));
   const Surface& plane = surfaces[host];
-  const Eigen::Vector3d normal = outward.dot(plane.axis) >= 0.0 ? plane.axis : -plane.axis;
   Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
   if (plane.type == SurfaceType::Cylinder) {  // turned about the cylinder's axis
     motion.linear() = Eigen::AngleAxisd(placement.rotation, plane.axis).toRotationMatrix();
     motion.translation() = plane.point - motion.linear() * plane.point + placement.translation;
     return motion;
   }
+  const Eigen::Vector3d normal = outward_normal(mesh, labels, host, plane);
   if (placement.onto < 0 || placement.onto == host) {
     motion.linear() = Eigen::AngleAxisd(placement.rotation, normal).toRotationMatrix();
     motion.translation() = centroid - motion.linear() * centroid + placement.translation;

@@ -1,6 +1,5 @@
 // Deleting a feature group: lift its triangles off, close each gap on its host, remesh the closing
-// triangles
-// (see delete_features.h).
+// triangles (see delete_features.h).
 #include "edit/delete_features.h"
 
 #include "edit/feature_groups.h"
@@ -8,9 +7,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
-#include <limits>
-#include <map>
 #include <set>
 #include <string>
 

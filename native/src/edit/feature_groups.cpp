@@ -17,6 +17,32 @@ Eigen::Vector3d face_normal_of(const TriangleMesh& mesh, int f) {
 
 }  // namespace
 
+double facing_side(const TriangleMesh& mesh, const std::vector<int>& region_faces, const Surface& surface) {
+  double facing = 0.0;
+  for (int f : region_faces) {
+    if (surface.type == SurfaceType::Plane) {
+      facing += face_normal_of(mesh, f).dot(surface.axis);
+      continue;
+    }
+    const Eigen::Vector3d centroid =
+        (mesh.V.row(mesh.F(f, 0)) + mesh.V.row(mesh.F(f, 1)) + mesh.V.row(mesh.F(f, 2))).transpose() / 3.0;
+    facing += face_normal_of(mesh, f).dot(axial_coordinates(surface.point, surface.axis, centroid).radial);
+  }
+  return facing >= 0.0 ? 1.0 : -1.0;
+}
+
+std::vector<int> faces_labelled(const std::vector<int>& labels, int feature) {
+  std::vector<int> faces;
+  for (size_t f = 0; f < labels.size(); ++f)
+    if (labels[f] == feature) faces.push_back(static_cast<int>(f));
+  return faces;
+}
+
+Eigen::Vector3d outward_normal(const TriangleMesh& mesh, const std::vector<int>& labels, int feature,
+                               const Surface& plane) {
+  return facing_side(mesh, faces_labelled(labels, feature), plane) * plane.axis;
+}
+
 namespace {
 
 // A chart of a plane or a cylinder: its frame about the axis, and the side the region faces (+1:
@@ -32,17 +58,7 @@ struct Chart {
 Chart chart_of(const TriangleMesh& mesh, const std::vector<int>& region_faces, const Surface& surface) {
   Chart chart;
   orthonormal_frame(surface.axis, chart.e1, chart.e2);
-  double facing = 0.0;
-  for (int f : region_faces) {
-    if (surface.type == SurfaceType::Plane) {
-      facing += face_normal_of(mesh, f).dot(surface.axis);
-      continue;
-    }
-    const Eigen::Vector3d centroid =
-        (mesh.V.row(mesh.F(f, 0)) + mesh.V.row(mesh.F(f, 1)) + mesh.V.row(mesh.F(f, 2))).transpose() / 3.0;
-    facing += face_normal_of(mesh, f).dot(axial_coordinates(surface.point, surface.axis, centroid).radial);
-  }
-  chart.side = facing >= 0.0 ? 1.0 : -1.0;
+  chart.side = facing_side(mesh, region_faces, surface);
   return chart;
 }
 

@@ -41,6 +41,18 @@ std::vector<BorderLoop> border_loops(const TriangleMesh& mesh, const std::vector
 bool is_inner_loop(const TriangleMesh& mesh, const std::vector<int>& loop, const std::vector<int>& region_faces,
                    const Surface& surface);
 
+// The side of `surface` (a plane or a cylinder) that the faces `region_faces` face, from their
+// area-weighted normals summed: +1 along a plane's axis or away from a cylinder's axis, -1 the
+// other way (a hole's wall).
+double facing_side(const TriangleMesh& mesh, const std::vector<int>& region_faces, const Surface& surface);
+
+// The faces labelled `feature` (labels: #F feature ids).
+std::vector<int> faces_labelled(const std::vector<int>& labels, int feature);
+
+// The outward normal of plane `feature`: its axis turned the way its faces face.
+Eigen::Vector3d outward_normal(const TriangleMesh& mesh, const std::vector<int>& labels, int feature,
+                               const Surface& plane);
+
 // The points of `loop` in a chart of `surface` (a plane or a cylinder) in which counter-clockwise
 // is counter-clockwise about the outward normal of `region_faces`: a plane's (u, v); a cylinder's
 // (radius × angle, height), the angle unwrapped along the loop. `winds` tells whether the loop

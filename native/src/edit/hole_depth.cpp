@@ -19,17 +19,6 @@ std::string named(int id, const Surface& s) {
   return "feature " + std::to_string(id) + " (" + surface_type_name(s.type) + ")";
 }
 
-// The outward normal of the faces labelled `feature`: the plane's axis turned the way they face.
-Eigen::Vector3d outward(const TriangleMesh& mesh, const std::vector<int>& labels, int feature, const Surface& plane) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    if (labels[f] == feature) {
-      const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-      sum += (b - a).cross(c - a);
-    }
-  return sum.dot(plane.axis) >= 0.0 ? plane.axis : Eigen::Vector3d(-plane.axis);
-}
-
 // The nearest triangle the ray from `origin` along `direction` (unit) meets beyond `skip`, and the
 // distance to it (Moller-Trumbore); -1 when it meets none.
 int first_hit(const TriangleMesh& mesh, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double skip,
@@ -128,13 +117,7 @@ FeatureGroup plain_hole(const TriangleMesh& mesh, const std::vector<int>& labels
                         int wall) {
   const Surface& cylinder = surfaces[wall];
   if (cylinder.type != SurfaceType::Cylinder) throw EditConflict(named(wall, cylinder) + " is not a hole's wall");
-  double facing = 0.0;
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    if (labels[f] == wall) {
-      const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-      facing += (b - a).cross(c - a).dot(axial_coordinates(cylinder.point, cylinder.axis, (a + b + c) / 3.0).radial);
-    }
-  if (facing >= 0.0) throw EditConflict(named(wall, cylinder) + " faces away from its axis: it is a boss, not a hole");
+  if (facing_side(mesh, faces_labelled(labels, wall), cylinder) > 0.0) throw EditConflict(named(wall, cylinder) + " faces away from its axis: it is a boss, not a hole");
   FeatureGroup group = feature_group(mesh, labels, surfaces, wall);
   if (group.hosts.empty()) throw EditConflict(named(wall, cylinder) + " is not a hole in a face");
   // Floors: planes across the axis to rounding (a billionth of a radian).
@@ -186,7 +169,7 @@ HoleResult set_hole_depth(const TriangleMesh& mesh, const std::vector<int>& labe
     throw std::invalid_argument("feature " + std::to_string(entry) + " is not a face the hole opens in");
   }
   const Surface& cylinder = surfaces[wall];
-  const Eigen::Vector3d entry_out = outward(mesh, labels, entry, surfaces[entry]);
+  const Eigen::Vector3d entry_out = outward_normal(mesh, labels, entry, surfaces[entry]);
   const Eigen::Vector3d a = cylinder.axis.dot(entry_out) < 0.0 ? cylinder.axis : Eigen::Vector3d(-cylinder.axis);
   if (std::abs(a.dot(entry_out)) < 1e-9)
     throw EditConflict("the hole's axis lies along " + named(entry, surfaces[entry]));
@@ -225,7 +208,7 @@ HoleResult set_hole_depth(const TriangleMesh& mesh, const std::vector<int>& labe
     result.kept.push_back(-1);
   }
   const Eigen::Vector3d exit_out =
-      result.through ? outward(gone.mesh, gone.labels, exit, result.surfaces[exit]) : Eigen::Vector3d::Zero();
+      result.through ? outward_normal(gone.mesh, gone.labels, exit, result.surfaces[exit]) : Eigen::Vector3d::Zero();
   const Decal decal = hole_decal(p0, a, cylinder.radius, result.depth, targets[wall], surfaces[entry], entry_out,
                                  result.through ? &result.surfaces[exit] : nullptr, exit_out, entry_new, exit,
                                  result.wall, result.floor);
