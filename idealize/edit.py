@@ -107,16 +107,24 @@ def rotate(layer, feature_ids, degrees, axis=None, center=None, keep=None, remes
 
 def feature_group(layer, feature_id):
     """The feature group that feature `feature_id` belongs to: a boss with its walls, top and the
-    blends at its base, a hole with its chamfers, a pocket with its walls and floor. The group ends
-    at its hosts, the planes and cylinders around which it is an island (thesis 6.2). A feature of
-    the part's outline has no group of its own: the group is the feature alone.
+    blends at its base, a hole with its chamfers, a pocket with its walls and floor, a notch in an
+    edge. The group ends at its hosts: the planes and cylinders around which it is an island
+    (thesis 6.2), or whose edge it dents (a notch, a boss against a wall or over an edge). A
+    feature of the part's outline has no group of its own: the group is the feature alone.
 
     Returns ``{"members": [ids], "hosts": [ids]}``, sorted; the user may add or drop members before
     passing them to :func:`delete`."""
+    return {key: value for key, value in _group(layer, feature_id).items() if key != "island"}
+
+
+def _group(layer, feature_id):
+    """feature_group's dict, with "island": whether each border loop of the group runs along one
+    host (only such a group travels as a decal)."""
     layer = as_feature_layer(layer)
     _feature(layer, feature_id)
-    group = native.feature_group(*_layer_arguments(layer)[:5], int(feature_id))
-    return {"members": list(group["members"]), "hosts": list(group["hosts"])}
+    group = native.feature_group(*_layer_arguments(layer)[:5], int(feature_id),
+                                 distance_tolerance=float(layer.distance_tolerance))
+    return {"members": list(group["members"]), "hosts": list(group["hosts"]), "island": bool(group["island"])}
 
 
 def copy(layer, feature_ids, translation, rotation=None, onto=None, remesh=True):
@@ -153,11 +161,17 @@ def copy(layer, feature_ids, translation, rotation=None, onto=None, remesh=True)
 
 def delete(layer, feature_ids, remesh=True):
     """Deletes features, usually a group of :func:`feature_group`: their triangles are lifted off and
-    each gap is closed on the plane or cylinder around it, which is remeshed. The other features keep
-    their surfaces exactly; they are renumbered in order (``layer.renumbered`` maps each old id
-    that remains to its new one; ``layer.created`` flags the triangles that close the gaps). A gap
-    that no single plane or cylinder surrounds raises :class:`EditConflict` naming the features
-    along it."""
+    the faces around each gap erode into it until it is closed, then remeshed. A group inside one
+    plane or cylinder is closed on it; a group that sat across edges (a notch in an edge, a boss
+    against a wall, a rib between two walls) is closed by its neighbours meeting along new edges,
+    and identical faces it kept apart join into one (the false edge between them is not made).
+
+    The other features keep their surfaces exactly; they are renumbered in order
+    (``layer.renumbered`` maps each old id that remains to its new one, a joined face to the one
+    it joined; ``layer.merged`` lists those (old id, old id joined); ``layer.created`` flags the
+    triangles that close the gaps; ``layer.new_edges`` and ``layer.corners`` count what the
+    erosion made). A gap the faces around it cannot close raises :class:`EditConflict` naming
+    them."""
     layer = as_feature_layer(layer)
     ids = _ids(feature_ids)
     for f in ids:
@@ -168,10 +182,26 @@ def delete(layer, feature_ids, remesh=True):
     renumbered = {old: new for new, old in enumerate(kept)}
     result["params"] = [layer.features[old]["params"] for old in kept]
     result["changed"] = [False] * len(kept)
+    features, adjacency, relations = _renumbered_graph(layer, renumbered)
+    merged = [(int(old), int(into)) for old, into in result["merged"]]
+    joined = dict(renumbered)
+    joined.update({old: renumbered[into] for old, into in merged})
+    # A joined face's edges pass to the face it joined, and the new edges join the graph.
+    pairs = {(a["a"], a["b"]) for a in adjacency} | {(a["b"], a["a"]) for a in adjacency}
+    extra = [(joined[a["a"]], joined[a["b"]], a) for a in layer.adjacency
+             if a["a"] in joined and a["b"] in joined and (a["a"] not in renumbered or a["b"] not in renumbered)]
+    extra += [(a, b, {"continuity": "G0"}) for a, b in result["edges"]]
+    for a, b, edge in extra:
+        if a != b and (a, b) not in pairs:
+            adjacency.append(dict(edge, a=a, b=b))
+            pairs |= {(a, b), (b, a)}
     out = _edited_layer(layer, result, _keep_flags(None), time.perf_counter() - start,
-                        _renumbered_graph(layer, renumbered))
+                        (features, adjacency, relations))
     out.changed = list(result["hosts"])
-    out.renumbered = renumbered
+    out.renumbered = joined
+    out.merged = merged
+    out.new_edges = int(result["new_edges"])
+    out.corners = int(result["corners"])
     out.created = np.asarray(result["created"], dtype=bool)
     return out
 
@@ -222,8 +252,8 @@ def _island(layer, ids):
     """Whether features `ids` are a whole feature group on host planes or cylinders."""
     for f in ids:
         _feature(layer, f)
-    group = feature_group(layer, ids[0])
-    return (sorted(set(ids)) == group["members"] and bool(group["hosts"])
+    group = _group(layer, ids[0])
+    return (sorted(set(ids)) == group["members"] and bool(group["hosts"]) and group["island"]
             and all(layer.features[h]["type"] in ("plane", "cylinder") for h in group["hosts"]))
 
 

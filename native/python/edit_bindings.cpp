@@ -128,23 +128,27 @@ void bind_structure_edits(py::module_& m) {
   m.def(
       "feature_group",
       [](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F, std::vector<int> labels,
-         const std::vector<std::string>& types, const std::vector<py::dict>& params, int seed) {
+         const std::vector<std::string>& types, const std::vector<py::dict>& params, int seed,
+         double distance_tolerance) {
         const std::vector<Surface> surfaces = surfaces_from(types, params);
         const TriangleMesh mesh = mesh_from(V, F);
         check_layer(mesh, labels, surfaces, {}, {});
         FeatureGroup group;
         {
           py::gil_scoped_release release;
-          group = feature_group(mesh, labels, surfaces, seed);
+          group = feature_group(mesh, labels, surfaces, seed, distance_tolerance);
         }
         py::dict d;
         d["members"] = group.members;
         d["hosts"] = group.hosts;
+        d["island"] = group.island;
         return d;
       },
       py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("seed"),
+      py::kw_only(), py::arg("distance_tolerance") = 0.0,
       "The feature group of feature `seed` in a layer's idealized mesh (V, F oriented, labels, the features' "
-      "types and params): dict(members, hosts), sorted ids.");
+      "types and params; the layer's distance tolerance): dict(members, hosts (sorted ids), island (each "
+      "border loop of the group runs along one host)).");
   m.def(
       "delete_features",
       [](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F, std::vector<int> labels,
@@ -164,14 +168,20 @@ void bind_structure_edits(py::module_& m) {
                                  result.target_edge_lengths, result.remeshing_problem);
         d["kept"] = result.kept;
         d["hosts"] = result.hosts;
+        d["merged"] = result.merged;
+        d["edges"] = result.edges;
+        d["new_edges"] = result.new_edges;
+        d["corners"] = result.corners;
         return d;
       },
       py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("types"), py::arg("params"), py::arg("adjacency"),
       py::arg("features"), py::kw_only(), py::arg("distance_tolerance") = 0.0, py::arg("remesh") = true,
       py::arg("target_edge_lengths") = std::vector<double>(),
-      "Deletes `features` from a layer's idealized mesh, closing each gap on the plane or cylinder around it: "
-      "dict(V, F, labels (new ids), kept (old id per new id), hosts (new ids), vertex_deviation, "
-      "target_edge_lengths, remeshing_problem). Raises EditConflict when a gap has no single face to close it.");
+      "Deletes `features` from a layer's idealized mesh; the faces around each gap erode into it until it is "
+      "closed: dict(V, F, labels (new ids), kept (old id per new id), hosts (new ids), merged ((old id, old id "
+      "it joined) for identical faces a gap joined), edges (new ids of the features along each new edge), "
+      "new_edges, corners, vertex_deviation, target_edge_lengths, remeshing_problem). Raises EditConflict "
+      "naming the features when the faces around a gap cannot close it.");
 
   m.def(
       "set_hole_depth",

@@ -1,6 +1,8 @@
-// Deleting a feature group: lift its triangles off, close each gap on its host, remesh the closing
-// triangles (see delete_features.h).
+// Deleting a feature group: lift its triangles off, close each gap on the faces around it, remesh
+// the closing triangles (see delete_features.h).
 #include "edit/delete_features.h"
+
+#include "edit/erosion.h"
 
 #include "edit/feature_groups.h"
 #include "edit/gaps.h"
@@ -32,19 +34,49 @@ DeleteResult delete_features(const TriangleMesh& mesh, const std::vector<int>& l
   take_rim_triangles(mesh, n, group_labels);
   const std::vector<BorderLoop> loops = border_loops(mesh, group_labels, n);
   if (loops.empty()) throw std::invalid_argument("the features to delete have no triangles");
-  const std::vector<int> hosts = gap_hosts(mesh, group_labels, n, surfaces, loops);
 
-  // The features that remain, renumbered in order.
+  // Each gap closed by the faces around it (erosion.h): its triangles and new vertices.
+  std::vector<int> identity(n);
+  for (int f = 0; f < n; ++f) identity[f] = f;
+  const std::set<std::pair<int, int>> g1 = tangent_pairs(adjacency, identity);
+  std::vector<ErodedGap> gaps;
+  int first_point = mesh.num_vertices();
+  std::vector<int> joined(n);  // union-find over the identical hosts a fill joins
+  for (int f = 0; f < n; ++f) joined[f] = f;
+  auto root = [&](int f) {
+    while (joined[f] != f) f = joined[f] = joined[joined[f]];
+    return f;
+  };
+  for (const BorderLoop& loop : loops) {
+    // New edges are cut at the spacing of the loop's own edges.
+    double length = 0.0;
+    for (size_t i = 0; i < loop.vertices.size(); ++i)
+      length += (mesh.V.row(loop.vertices[i]) - mesh.V.row(loop.vertices[(i + 1) % loop.vertices.size()])).norm();
+    gaps.push_back(erode_gap(mesh, group_labels, surfaces, loop, first_point, options.distance_tolerance, g1,
+                             length / static_cast<double>(loop.vertices.size())));
+    first_point += static_cast<int>(gaps.back().points.size());
+    for (const auto& [f, into] : gaps.back().merged) {
+      const int a = root(f), b = root(into);
+      if (a != b) joined[std::max(a, b)] = std::min(a, b);
+    }
+  }
+
+  // The features that remain, renumbered in order; a host joined to an identical one goes.
   DeleteResult result;
   std::vector<int> new_id(n, -1);
   for (int f = 0; f < n; ++f)
-    if (!deleted[f]) {
+    if (!deleted[f] && root(f) == f) {
       new_id[f] = static_cast<int>(result.kept.size());
       result.kept.push_back(f);
     }
+  for (int f = 0; f < n; ++f)
+    if (!deleted[f] && root(f) != f) {
+      new_id[f] = new_id[root(f)];
+      result.merged.emplace_back(f, root(f));
+    }
   std::vector<Surface> kept_surfaces;
   for (int f : result.kept) kept_surfaces.push_back(surfaces[f]);
-  // Faces: those outside the group, then each gap closed on its host.
+  // Faces: those outside the group, then each gap's.
   std::vector<std::array<int, 3>> faces;
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (group_labels[f] != n) {
@@ -52,25 +84,28 @@ DeleteResult delete_features(const TriangleMesh& mesh, const std::vector<int>& l
       result.labels.push_back(labels[f] >= 0 ? new_id[labels[f]] : -1);
       result.created.push_back(0);
     }
-  std::vector<std::vector<int>> host_faces(n);
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    if (group_labels[f] >= 0 && group_labels[f] != n) host_faces[group_labels[f]].push_back(f);
+  MatrixX3d V(first_point, 3);
+  V.topRows(mesh.num_vertices()) = mesh.V;
   std::set<int> host_set;
-  for (size_t i = 0; i < loops.size(); ++i) {
-    const int host = hosts[i];
-    bool winds = false;
-    // Walked as the group's border, the loop is counter-clockwise about the host's outside.
-    const std::vector<Eigen::Vector2d> chart = loop_chart(mesh, loops[i].vertices, host_faces[host], surfaces[host], winds);
-    for (const std::array<int, 3>& t : close_polygon(chart)) {
-      faces.push_back({loops[i].vertices[t[0]], loops[i].vertices[t[1]], loops[i].vertices[t[2]]});
-      result.labels.push_back(new_id[host]);
+  std::set<std::pair<int, int>> edges;
+  int row = mesh.num_vertices();
+  for (const ErodedGap& gap : gaps) {
+    for (const Eigen::Vector3d& p : gap.points) V.row(row++) = p.transpose();
+    for (size_t t = 0; t < gap.faces.size(); ++t) {
+      faces.push_back(gap.faces[t]);
+      result.labels.push_back(new_id[gap.hosts[t]]);
       result.created.push_back(1);
+      host_set.insert(new_id[gap.hosts[t]]);
     }
-    host_set.insert(new_id[host]);
+    for (const auto& [a, b] : gap.edges)
+      if (new_id[a] != new_id[b]) edges.insert({std::min(new_id[a], new_id[b]), std::max(new_id[a], new_id[b])});
+    result.new_edges += static_cast<int>(gap.edges.size());
+    result.corners += gap.corners;
   }
+  result.edges.assign(edges.begin(), edges.end());
   result.hosts.assign(host_set.begin(), host_set.end());
   if (is_closed(mesh)) check_closed(faces);
-  result.mesh = compact_mesh(mesh.V, faces);
+  result.mesh = compact_mesh(V, faces);
 
   // The closing triangles remeshed at their hosts' density; the other triangles stay.
   const std::vector<double> before = remeshing_targets(mesh, labels, surfaces, options.target_edge_lengths,

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <map>
 #include <set>
 #include <utility>
 
@@ -29,6 +31,19 @@ double facing_side(const TriangleMesh& mesh, const std::vector<int>& region_face
     facing += face_normal_of(mesh, f).dot(axial_coordinates(surface.point, surface.axis, centroid).radial);
   }
   return facing >= 0.0 ? 1.0 : -1.0;
+}
+
+bool identical_regions(const TriangleMesh& mesh, const std::vector<int>& a, const Surface& sa,
+                       const std::vector<int>& b, const Surface& sb, double tolerance) {
+  if (sa.type != sb.type || (sa.type != SurfaceType::Plane && sa.type != SurfaceType::Cylinder)) return false;
+  auto on = [&](const std::vector<int>& faces, const Surface& s) {
+    for (int f : faces)
+      for (int c = 0; c < 3; ++c)
+        if (!(std::abs(signed_distance(s, mesh.V.row(mesh.F(f, c)).transpose())) <= tolerance)) return false;
+    return true;
+  };
+  // Facing the same side of the shared surface: the two sides of a thin sheet are not one face.
+  return on(a, sb) && on(b, sa) && facing_side(mesh, a, sb) == facing_side(mesh, b, sb);
 }
 
 std::vector<int> faces_labelled(const std::vector<int>& labels, int feature) {
@@ -195,8 +210,69 @@ bool is_inner_loop(const TriangleMesh& mesh, const std::vector<int>& loop, const
   return twice_area < 0.0;
 }
 
+namespace {
+
+// The features that dent region h's outline `loop` (border_loops; h's faces `region_faces` on
+// `surface`) along an edge: a run of the loop's arcs between two arcs along one feature y, or
+// along two features y and z that `bound` a dent (that meet, and the dent takes a corner; or that
+// are identical, and the dent ran across what joined them), that turns into h's region, by
+// more than `tolerance` over its length (a notch in the edge, a boss against a wall, a boss over
+// the edge). Measured in h's chart: the run closed by the straight way back from its end to its
+// start turns clockwise, and encloses more than tolerance x its length.
+std::set<int> edge_dents(const TriangleMesh& mesh, const BorderLoop& loop, const std::vector<int>& region_faces,
+                         const Surface& surface, const std::function<bool(int, int)>& bound, double tolerance) {
+  std::set<int> dents;
+  const int n = static_cast<int>(loop.vertices.size());
+  std::vector<int> arc_start;  // the loop's arcs along one feature each: their first edges
+  for (int e = 0; e < n; ++e)
+    if (loop.across[e] != loop.across[(e + n - 1) % n]) arc_start.push_back(e);
+  const int k = static_cast<int>(arc_start.size());
+  if (k < 3) return dents;
+  // The loop turned to begin at an arc, in the chart, with prefix sums of the shoelace terms and
+  // of the edge lengths.
+  std::vector<int> loop_vertices(n);
+  for (int i = 0; i < n; ++i) loop_vertices[i] = loop.vertices[(arc_start[0] + i) % n];
+  bool winds = false;
+  const std::vector<Eigen::Vector2d> p = loop_chart(mesh, loop_vertices, region_faces, surface, winds);
+  std::vector<double> shoelace(n + 1, 0.0), length(n + 1, 0.0);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d &a = p[i], &b = p[(i + 1) % n];
+    shoelace[i + 1] = shoelace[i] + (a.x() * b.y() - a.y() * b.x());
+    length[i + 1] = length[i] + (b - a).norm();
+  }
+  std::vector<int> start(k + 1), feature(k);
+  for (int a = 0; a < k; ++a) {
+    start[a] = (arc_start[a] - arc_start[0] + n) % n;
+    feature[a] = loop.across[arc_start[a]];
+  }
+  start[k] = n;
+  for (int i = 0; i < k; ++i) {
+    const int y = feature[i];
+    if (y < 0) continue;
+    std::set<int> run;
+    // The run: arcs i + 1 .. j - 1 (cyclic, shorter than the loop), from the start of arc i + 1
+    // to the start of arc j.
+    for (int step = 2; step < k; ++step) {
+      const int j = (i + step) % k, last = (i + step - 1) % k;
+      run.insert(feature[last]);
+      const int z = feature[j];
+      if (z < 0 || run.count(y) || run.count(-1)) break;
+      if (run.count(z) || (z != y && !bound(y, z))) continue;
+      const int from = start[(i + 1) % k], to = start[j];
+      // Shoelace over the run's edges, then the chord back.
+      double twice = to >= from ? shoelace[to] - shoelace[from] : shoelace[n] - shoelace[from] + shoelace[to];
+      const double along = to >= from ? length[to] - length[from] : length[n] - length[from] + length[to];
+      twice += p[to % n].x() * p[from].y() - p[to % n].y() * p[from].x();
+      if (-0.5 * twice > tolerance * along) dents.insert(run.begin(), run.end());
+    }
+  }
+  return dents;
+}
+
+}  // namespace
+
 FeatureGroup feature_group(const TriangleMesh& mesh, const std::vector<int>& labels,
-                           const std::vector<Surface>& surfaces, int seed) {
+                           const std::vector<Surface>& surfaces, int seed, double tolerance) {
   const int n = static_cast<int>(surfaces.size());
   if (seed < 0 || seed >= n) throw std::invalid_argument("the layer has no feature " + std::to_string(seed));
   std::vector<std::vector<int>> faces_of(n);
@@ -208,14 +284,16 @@ FeatureGroup feature_group(const TriangleMesh& mesh, const std::vector<int>& lab
     }
   const MeshTopology topology(mesh);
   std::vector<char> used(3 * static_cast<size_t>(mesh.num_faces()), 0);
-  // hosted[h]: the features that h's region holds on an inner loop; floor[h]: h is sunk (every
-  // other loop of it concave) and has one inner loop, a convex one.
+  // hosted[h]: the features that h's region holds on an inner loop, or that dent its outline along
+  // an edge (edge_dents); floor[h]: h is sunk (every other loop of it concave) and has one inner
+  // loop, a convex one.
   std::vector<std::set<int>> hosted(n), neighbours(n);
+  std::vector<std::vector<BorderLoop>> outlines(n);
   std::vector<char> floor(n, 0);
   for (int h = 0; h < n; ++h) {
     if (faces_of[h].empty()) continue;
     int inner = 0, convex_inner = 0, outline = 0, concave_outline = 0;
-    for (const BorderLoop& loop : loops_of(mesh, topology, labels, h, faces_of[h], used)) {
+    for (BorderLoop& loop : loops_of(mesh, topology, labels, h, faces_of[h], used)) {
       neighbours[h].insert(loop.across.begin(), loop.across.end());
       if (is_inner_loop(mesh, loop.vertices, faces_of[h], surfaces[h])) {
         hosted[h].insert(loop.across.begin(), loop.across.end());
@@ -224,11 +302,26 @@ FeatureGroup feature_group(const TriangleMesh& mesh, const std::vector<int>& lab
       } else {
         ++outline;
         concave_outline += loop.concave();
+        if (surfaces[h].type == SurfaceType::Plane || surfaces[h].type == SurfaceType::Cylinder)
+          outlines[h].push_back(std::move(loop));
       }
     }
     neighbours[h].erase(-1);
     floor[h] = inner == 1 && convex_inner == 1 && outline > 0 && concave_outline == outline;
   }
+  std::map<std::pair<int, int>, bool> identical;
+  auto bound = [&](int y, int z) {
+    if (neighbours[y].count(z)) return true;
+    const auto key = std::make_pair(std::min(y, z), std::max(y, z));
+    const auto known = identical.find(key);
+    if (known != identical.end()) return known->second;
+    return identical[key] = identical_regions(mesh, faces_of[y], surfaces[y], faces_of[z], surfaces[z], tolerance);
+  };
+  for (int h = 0; h < n; ++h)
+    for (const BorderLoop& loop : outlines[h]) {
+      const std::set<int> dents = edge_dents(mesh, loop, faces_of[h], surfaces[h], bound, tolerance);
+      hosted[h].insert(dents.begin(), dents.end());
+    }
   std::set<int> members{seed}, hosts;
   std::vector<int> open{seed};
   auto join = [&](int x) {
@@ -256,13 +349,20 @@ FeatureGroup feature_group(const TriangleMesh& mesh, const std::vector<int>& lab
   for (int m : members) inside += area[m];
   FeatureGroup group;
   if (2.0 * inside >= total || hosts.empty()) {  // no group of its own: the seed alone
-    group.members = {seed};
+    members = {seed};
     for (int x : neighbours[seed])
       if (hosted[x].count(seed)) group.hosts.push_back(x);
-    return group;
+  } else {
+    group.hosts.assign(hosts.begin(), hosts.end());
   }
   group.members.assign(members.begin(), members.end());
-  group.hosts.assign(hosts.begin(), hosts.end());
+  // An island when each border loop of the group runs along one host.
+  std::vector<int> group_labels = labels;
+  for (int& l : group_labels)
+    if (l >= 0 && l < n && members.count(l)) l = n;
+  group.island = true;
+  for (const BorderLoop& loop : loops_of(mesh, topology, group_labels, n, faces_labelled(group_labels, n), used))
+    group.island &= std::set<int>(loop.across.begin(), loop.across.end()).size() == 1;
   return group;
 }
 

@@ -46,6 +46,12 @@ bool is_inner_loop(const TriangleMesh& mesh, const std::vector<int>& loop, const
 // other way (a hole's wall).
 double facing_side(const TriangleMesh& mesh, const std::vector<int>& region_faces, const Surface& surface);
 
+// Whether the regions of faces `a` on surface `sa` and `b` on `sb` (planes or cylinders) lie on one
+// surface: every vertex of each within `tolerance` of the other's surface, facing the same side.
+// Two faces a feature kept apart (the floor either side of a rib) are identical.
+bool identical_regions(const TriangleMesh& mesh, const std::vector<int>& a, const Surface& sa,
+                       const std::vector<int>& b, const Surface& sb, double tolerance);
+
 // The faces labelled `feature` (labels: #F feature ids).
 std::vector<int> faces_labelled(const std::vector<int>& labels, int feature);
 
@@ -68,17 +74,21 @@ std::vector<Eigen::Vector2d> points_chart(const TriangleMesh& mesh, const std::v
 
 struct FeatureGroup {
   std::vector<int> members;  // the group's features, sorted (the seed among them)
-  std::vector<int> hosts;    // the planes and cylinders that carry it on inner loops, sorted
+  std::vector<int> hosts;    // the planes and cylinders that carry it, sorted
+  bool island = false;       // each border loop of the group runs along one host
 };
 
 // The group of feature `seed`: from the seed, the features across its border join the group,
-// except those whose region holds the border on an inner loop (a host). A host sunk into the part
+// except those whose region holds the border on an inner loop, or whose outline the border dents
+// along an edge, turning into the region by more than `tolerance` (the layer's distance
+// tolerance) over its length (a host: the faces either side of a notch in an edge, or of a boss
+// against a wall). A host sunk into the part
 // (its outline concave throughout) that holds the group on its only inner loop, a convex one, is
 // the floor the group goes down from, and joins it: the step of a counterbored hole, the floor of
 // a pocket with a hole through it. When the group would take as much area as the rest of the
 // part, the seed has no group of its own: the group is the seed alone, with the features around
 // it as hosts where they are (a plane of the part's outside).
 FeatureGroup feature_group(const TriangleMesh& mesh, const std::vector<int>& labels,
-                           const std::vector<Surface>& surfaces, int seed);
+                           const std::vector<Surface>& surfaces, int seed, double tolerance);
 
 }  // namespace idealize

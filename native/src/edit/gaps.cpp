@@ -77,7 +77,7 @@ std::vector<int> gap_hosts(const TriangleMesh& mesh, const std::vector<int>& gro
       throw EditConflict("the group reaches the mesh's open border or a triangle set aside: there is no face to close it");
     if (across.size() > 1)
       throw EditConflict("the group's border runs along features " + feature_list(across) +
-                         ", not around one face: only a group that one plane or cylinder surrounds can be deleted");
+                         ", not around one face: only a group that one plane or cylinder surrounds travels as a decal");
     const int host = *across.begin();
     const Surface& s = surfaces[host];
     if (s.type != SurfaceType::Plane && s.type != SurfaceType::Cylinder)

@@ -25,7 +25,7 @@ namespace idealize {
 void take_rim_triangles(const TriangleMesh& mesh, int group, std::vector<int>& labels);
 
 // The host of each of `loops` (the border loops of the faces labelled `group` in `labels`): the
-// one plane or cylinder along it, holding it as an inner loop. Throws EditConflict naming the
+// one plane or cylinder along it, holding it as an inner loop, which a decal of the group needs. Throws EditConflict naming the
 // features otherwise: a loop along several features, along the mesh's border, on another type of
 // surface, or on the outline of its host.
 std::vector<int> gap_hosts(const TriangleMesh& mesh, const std::vector<int>& labels, int group,

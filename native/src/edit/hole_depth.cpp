@@ -112,13 +112,13 @@ Decal hole_decal(const Eigen::Vector3d& p0, const Eigen::Vector3d& a, double r, 
 }
 
 // Throws EditConflict unless the group of `wall` is a plain hole: a cylinder facing its axis, with
-// at most flat floors across the axis; returns the group.
+// at most flat floors across the axis; returns the group (`tolerance`: feature_group's).
 FeatureGroup plain_hole(const TriangleMesh& mesh, const std::vector<int>& labels, const std::vector<Surface>& surfaces,
-                        int wall) {
+                        int wall, double tolerance) {
   const Surface& cylinder = surfaces[wall];
   if (cylinder.type != SurfaceType::Cylinder) throw EditConflict(named(wall, cylinder) + " is not a hole's wall");
   if (facing_side(mesh, faces_labelled(labels, wall), cylinder) > 0.0) throw EditConflict(named(wall, cylinder) + " faces away from its axis: it is a boss, not a hole");
-  FeatureGroup group = feature_group(mesh, labels, surfaces, wall);
+  FeatureGroup group = feature_group(mesh, labels, surfaces, wall, tolerance);
   if (group.hosts.empty()) throw EditConflict(named(wall, cylinder) + " is not a hole in a face");
   // Floors: planes across the axis to rounding (a billionth of a radian).
   std::vector<const Surface*> plain{&cylinder};
@@ -156,7 +156,7 @@ HoleResult set_hole_depth(const TriangleMesh& mesh, const std::vector<int>& labe
   const int n = static_cast<int>(surfaces.size());
   if (wall < 0 || wall >= n) throw std::invalid_argument("the layer has no feature " + std::to_string(wall));
   if (!(depth > 0.0) || !std::isfinite(depth)) throw std::invalid_argument("a hole's depth must be a positive number");
-  const FeatureGroup group = plain_hole(mesh, labels, surfaces, wall);
+  const FeatureGroup group = plain_hole(mesh, labels, surfaces, wall, options.distance_tolerance);
   if (entry < 0) {  // the one host, or the larger
     std::vector<double> area(n, 0.0);
     for (int f = 0; f < mesh.num_faces(); ++f)
