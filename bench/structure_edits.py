@@ -18,6 +18,13 @@ the FreeCAD part built with the group deleted, copied or moved, or the hole of t
   (closing the gaps, the rings around a placed group; target 99 %), and over the whole mesh beside
   the original's (the other triangles are the original's).
 
+Groups across the edges of several faces (EROSION; the thesis's erosion into the gap): a notch in
+a block's edge and at its corner, a block boss against a step's riser, a notch in the edge of a
+shaft's end (a new edge on a circle), a step along a block's end (new corners), a rib between two
+walls (the floor faces either side join). Each is deleted and checked as above against the part
+built without it; the group proposed from one of its features must be the features that part
+lacks (the step and the rib are given: they are not proposed).
+
 Speed: the boss plate meshed at SPEED_LENGTH (97k triangles, more than the issue's 75k); each
 edit's median of SPEED_RUNS runs (target <= 2 s), beside idealize's on the same mesh.
 """
@@ -80,6 +87,89 @@ PARTS: Dict[str, Tuple[Callable, Callable, List]] = {
         ("move +(45, 10, 0), 30°", "move", (45, 10, 0), 30.0, [(75, 40)]),
     ]),
 }
+
+
+# Groups across the edges of several faces (the thesis's erosion, 6.2.2): each part with the group
+# (with=True) and without it (what deleting it must give). The group: proposed by feature_group
+# from the seed, or (`given`) the features the part without it does not have, for a group that is
+# not proposed (a step at the end is the outline's, a rib between walls parts the floor).
+def notch_block(corner=False, with_group=True):
+    FreeCAD, Part = _cad()
+    block = Part.makeBox(60, 40, 20)
+    return block.cut(Part.makeBox(10, 8, 6, FreeCAD.Vector(50 if corner else 25, 0, 14))) if with_group else block
+
+
+def step_block(with_group=True):
+    FreeCAD, Part = _cad()
+    block = Part.makeBox(60, 40, 20)
+    return block.cut(Part.makeBox(20, 40, 8, FreeCAD.Vector(40, 0, 12))) if with_group else block
+
+
+def riser_boss(with_group=True):
+    FreeCAD, Part = _cad()
+    base = Part.makeBox(60, 40, 10).fuse(Part.makeBox(20, 40, 10, FreeCAD.Vector(40, 0, 10))).removeSplitter()
+    return base.fuse(Part.makeBox(8, 10, 6, FreeCAD.Vector(32, 15, 10))).removeSplitter() if with_group else base
+
+
+def channel_rib(with_group=True):
+    FreeCAD, Part = _cad()
+    channel = Part.makeBox(60, 40, 20).cut(Part.makeBox(40, 40, 12, FreeCAD.Vector(10, 0, 8)))
+    return channel.fuse(Part.makeBox(40, 6, 5, FreeCAD.Vector(10, 17, 8))).removeSplitter() if with_group else channel
+
+
+def shaft_notch(with_group=True):
+    FreeCAD, Part = _cad()
+    shaft = Part.makeCylinder(15, 60)
+    return shaft.cut(Part.makeBox(6, 8, 6, FreeCAD.Vector(-3, 10, 54))) if with_group else shaft
+
+
+def _plane_at(axis, at):
+    return lambda layer: [f["id"] for f in layer.features if f["type"] == "plane"
+                          and abs(abs(f["params"]["normal"][axis]) - 1) < 1e-9 and abs(f["params"]["point"][axis] - at) < 1e-6]
+
+
+# part: (build(with_group), seed finder, given: the group is the features the part without it lacks)
+EROSION: Dict[str, Tuple[Callable, Callable, bool]] = {
+    "notch in an edge": (notch_block, _plane_at(2, 14.0), False),
+    "notch at a corner": (lambda with_group=True: notch_block(True, with_group), _plane_at(2, 14.0), False),
+    "boss against a wall": (riser_boss, _plane_at(2, 16.0), False),
+    "notch in a shaft's end": (shaft_notch, _plane_at(2, 54.0), False),
+    "step at an end": (step_block, _plane_at(0, 40.0), True),
+    "rib between walls": (channel_rib, _plane_at(2, 13.0), True),
+}
+
+
+def _not_on(layer, shape):
+    """The features whose vertices leave the faces of `shape`."""
+    FreeCAD, Part = _cad()
+    shell, labels, out = shape.Shells[0], np.asarray(layer.labels), []
+    for f in layer.features:
+        points = layer.idealized_vertices[np.unique(layer.mesh.faces[labels == f["id"]])]
+        if any(shell.distToShape(Part.Vertex(FreeCAD.Vector(*p)))[0] > 1e-6 for p in points):
+            out.append(f["id"])
+    return out
+
+
+def run_erosion(name: str) -> Dict:
+    """Deletes the group of an EROSION part: the solid against the part built without it."""
+    import run_edit
+    from idealize import edit
+    build, seed, given = EROSION[name]
+    start = time.perf_counter()
+    layer = run_edit.make_layer(build())
+    group = edit.feature_group(layer, seed(layer)[0])
+    members = _not_on(layer, build(with_group=False)) if given else group["members"]
+    out = {"part": name, "triangles": int(len(layer.mesh.faces)), "features": len(layer.features),
+           "group": {"members": members, "types": [layer.features[m]["type"] for m in members],
+                     "hosts": group["hosts"] if not given else [], "proposed": members == group["members"]},
+           "well_shaped_original": _well_shaped(layer.idealized_vertices, layer.mesh.faces), "edits": []}
+    row = run_edit_row(layer, lambda centres: build(with_group=False), members, out["group"]["hosts"],
+                       "delete", "delete", None, None, [])
+    if not given:  # the proposal is the group: the features the part without it lacks
+        row["pass"]["group"] = sorted(members) == sorted(_not_on(layer, build(with_group=False)))
+    out["edits"].append(row)
+    out["seconds"] = time.perf_counter() - start
+    return out
 
 
 def blind_plate(depth=6.0):
@@ -156,10 +246,12 @@ def _well_shaped(V, F, mask=None) -> float:
 
 
 def _unchanged(layer, edited, members, operation) -> Dict:
-    """Features outside the group: the same parameters after the edit (under their new ids)."""
+    """Features outside the group: the same parameters after the edit (under their new ids; a face
+    joined to an identical one, those of the one it joined)."""
     renumbered = getattr(edited, "renumbered", None) or {f: f for f in range(len(layer.features))}
+    joined = dict(getattr(edited, "merged", []))
     outside = [f for f in range(len(layer.features)) if f not in members]
-    same = sum(edited.features[renumbered[f]]["params"] == layer.features[f]["params"] for f in outside)
+    same = sum(edited.features[renumbered[f]]["params"] == layer.features[joined.get(f, f)]["params"] for f in outside)
     return {"features": len(outside), "same": int(same)}
 
 
@@ -171,6 +263,9 @@ def run_edit_row(layer, build, members, hosts, label, operation, translation, ro
         start = time.perf_counter()
         edited = _apply(layer, operation, members, translation, rotation)
         row["seconds"] = time.perf_counter() - start
+        if operation == "delete":
+            row["edit"] = "delete: %d new edges, %d corners, %d joined" % (edited.new_edges, edited.corners,
+                                                                          len(edited.merged))
         expected = build(centres)
         made = idealize.make_solid(edited)
         types = {}
@@ -223,10 +318,12 @@ def run_part(name: str) -> Dict:
 
 
 def run_task(name: str) -> Dict:
-    return run_depths() if name == "blind hole" else run_part(name)
+    if name == "blind hole":
+        return run_depths()
+    return run_erosion(name) if name in EROSION else run_part(name)
 
 
-TASKS = tuple(PARTS) + ("blind hole",)
+TASKS = tuple(PARTS) + ("blind hole",) + tuple(EROSION)
 
 
 def speed_mesh() -> Tuple[np.ndarray, np.ndarray]:
@@ -272,7 +369,8 @@ def markdown(parts: List[Dict], speed) -> List[str]:
         if "edits" not in part:
             lines.append("| %s | **failed**: %s |||||||||||" % (part["part"], part.get("error")))
             continue
-        group = "%s (%s)" % ("+".join(part["group"]["types"]), ", ".join(str(h) for h in part["group"]["hosts"]))
+        group = "%s (%s)" % ("+".join(part["group"]["types"]), ", ".join(str(h) for h in part["group"]["hosts"])
+                             if part["group"].get("proposed", True) else "given")
         for row in part["edits"]:
             head = "| %s | %d | %s | %s |" % (part["part"], part["triangles"], group, row["edit"])
             if "error" in row:

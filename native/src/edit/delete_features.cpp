@@ -3,7 +3,6 @@
 #include "edit/delete_features.h"
 
 #include "edit/erosion.h"
-
 #include "edit/feature_groups.h"
 #include "edit/gaps.h"
 
