@@ -34,34 +34,6 @@ void unite(std::vector<int>& parent, int a, int b) {
   if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the smaller id stays
 }
 
-double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
-}
-
-// Whether segments pq and rs cross or touch.
-bool segments_meet(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Eigen::Vector2d& r,
-                   const Eigen::Vector2d& s) {
-  const double d1 = cross2(p, q, r), d2 = cross2(p, q, s), d3 = cross2(r, s, p), d4 = cross2(r, s, q);
-  if (((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0)) && d1 != 0 && d2 != 0 && d3 != 0 && d4 != 0) return true;
-  auto within = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& x) {
-    return x.x() >= std::min(a.x(), b.x()) && x.x() <= std::max(a.x(), b.x()) && x.y() >= std::min(a.y(), b.y()) &&
-           x.y() <= std::max(a.y(), b.y());
-  };
-  return (d1 == 0 && within(p, q, r)) || (d2 == 0 && within(p, q, s)) || (d3 == 0 && within(r, s, p)) ||
-         (d4 == 0 && within(r, s, q));
-}
-
-// Whether a closed polygon is simple: no two edges that do not follow each other meet.
-bool simple(const std::vector<Eigen::Vector2d>& p) {
-  const size_t n = p.size();
-  for (size_t i = 0; i < n; ++i)
-    for (size_t j = i + 2; j < n; ++j) {
-      if (i == 0 && j == n - 1) continue;
-      if (segments_meet(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n])) return false;
-    }
-  return true;
-}
-
 double signed_area(const std::vector<Eigen::Vector2d>& p) {
   double twice = 0.0;
   for (size_t i = 0; i < p.size(); ++i) {
@@ -108,6 +80,14 @@ class GapCloser {
       : mesh_(mesh), labels_(labels), surfaces_(surfaces), loop_(loop), first_point_(first_point),
         tolerance_(tolerance), g1_(g1), spacing_(spacing) {
     length_ = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
+    // Corners lie among the gap's border: within its bounding box, to the tolerance.
+    low_ = high_ = mesh.V.row(loop.vertices[0]).transpose();
+    for (int v : loop.vertices) {
+      low_ = low_.cwiseMin(mesh.V.row(v).transpose());
+      high_ = high_.cwiseMax(mesh.V.row(v).transpose());
+    }
+    low_.array() -= tolerance;
+    high_.array() += tolerance;
   }
 
   // The gap closed: with the transitions left unpaired (none, or three and more) meeting at
@@ -213,11 +193,12 @@ class GapCloser {
   // One way of closing the gap: the unpaired transitions' regions (region i lies before
   // open_[i], between open_[i - 1] and open_[i]) meeting at the corners of `triangles`.
   ErodedGap attempt(const std::vector<std::array<int, 3>>& triangles) {
-    Attempt a{*this, triangles};
+    Attempt a(*this, triangles);
     return a.run();
   }
 
   struct Attempt {
+    Attempt(GapCloser& closer, const std::vector<std::array<int, 3>>& corners) : g(closer), triangles(corners) {}
     GapCloser& g;
     const std::vector<std::array<int, 3>>& triangles;
     ErodedGap out;
@@ -228,6 +209,7 @@ class GapCloser {
     std::map<std::pair<int, int>, std::vector<int>> triangles_of;  // (region, region), smaller first
     std::vector<char> visited;
     std::vector<int> piece_host;                    // per arc: the feature its piece closes on
+    TriangleMesh extended;                          // the mesh's vertices, then the new points
 
     int m() const { return static_cast<int>(g.open_.size()); }
     int region(int i) const { return g.arcs_[g.open_[(i + m()) % m()]].host; }
@@ -239,6 +221,10 @@ class GapCloser {
       visited.assign(arcs, 0);
       piece_host.assign(arcs, -1);
       make_edges();
+      // The mesh's vertices and the new points under their ids, for the pieces' charts.
+      extended = TriangleMesh{MatrixX3d::Zero(g.first_point_ + static_cast<int>(out.points.size()), 3), g.mesh_.F};
+      extended.V.topRows(g.mesh_.num_vertices()) = g.mesh_.V;
+      for (size_t i = 0; i < out.points.size(); ++i) extended.V.row(g.first_point_ + static_cast<int>(i)) = out.points[i];
       for (int a = 0; a < arcs; ++a)
         if (!visited[a]) close_piece(a);
       // The new edges, between the features of the pieces on either side.
@@ -257,12 +243,15 @@ class GapCloser {
     }
 
     // A point on all of `hosts`' surfaces near p, or a conflict naming them.
-    Eigen::Vector3d on_all(const std::vector<int>& hosts, const Eigen::Vector3d& p) {
+    // A corner (`corner`) must also lie among the gap's border, within its bounding box: three
+    // nearly parallel planes meet far away.
+    Eigen::Vector3d on_all(const std::vector<int>& hosts, const Eigen::Vector3d& p, bool corner = false) {
       const Eigen::Vector3d q = onto_features(hosts, g.surfaces_, g.g1_, p, g.length_);
-      for (int h : hosts)
-        if (!(std::abs(signed_distance(g.surfaces_[h], q)) <= g.tolerance_))
-          throw EditConflict("the surfaces of features " + names(std::set<int>(hosts.begin(), hosts.end())) +
-                             " do not meet inside the gap: no edge between them closes it");
+      bool on = !corner || (((q - g.low_).array() >= 0.0).all() && ((g.high_ - q).array() >= 0.0).all());
+      for (int h : hosts) on &= std::abs(signed_distance(g.surfaces_[h], q)) <= g.tolerance_;
+      if (!on)
+        throw EditConflict("the surfaces of features " + names(std::set<int>(hosts.begin(), hosts.end())) +
+                           " do not meet inside the gap: no edge between them closes it");
       return q;
     }
 
@@ -313,7 +302,7 @@ class GapCloser {
           for (int i = 0; i < m(); ++i) start += position(g.transition(g.open_[i])) / m();
         else
           start /= count;
-        corner.push_back(add_point(on_all(std::vector<int>(hosts.begin(), hosts.end()), start)));
+        corner.push_back(add_point(on_all(std::vector<int>(hosts.begin(), hosts.end()), start, true)));
         for (int k = 0; k < 3; ++k) {
           const int x = tri[k], y = tri[(k + 1) % 3];
           triangles_of[{std::min(x, y), std::max(x, y)}].push_back(static_cast<int>(t));
@@ -390,22 +379,26 @@ class GapCloser {
     // host's outside and simple, or the host cannot close over it. The piece joins its features;
     // the smallest id stays.
     void check_and_fill(const std::vector<int>& polygon, const std::set<int>& features, const std::vector<int>& arcs) {
-      const TriangleMesh& mesh = g.mesh_;
-      TriangleMesh extended{MatrixX3d(mesh.num_vertices() + static_cast<int>(out.points.size()), 3), mesh.F};
-      extended.V.topRows(mesh.num_vertices()) = mesh.V;
-      for (size_t i = 0; i < out.points.size(); ++i) extended.V.row(g.first_point_ + static_cast<int>(i)) = out.points[i];
       const int host = *features.begin();
       for (int arc : arcs) piece_host[arc] = host;
       std::vector<int> region_faces;
       for (int f : features) region_faces.insert(region_faces.end(), g.faces_[f].begin(), g.faces_[f].end());
       bool winds = false;
       const std::vector<Eigen::Vector2d> chart = loop_chart(extended, polygon, region_faces, g.surfaces_[host], winds);
-      if (winds || signed_area(chart) <= 0.0 || !simple(chart))
+      // A constrained Delaunay triangulation of the piece (gaps.h), once it is known to be simple
+      // (CGAL would insert the crossings of constraints that cross).
+      std::vector<std::array<int, 3>> triangles;
+      if (!winds && signed_area(chart) > 0.0 && simple_polygon(chart)) try {
+          triangles = fill_ring(chart, {});
+        } catch (const EditConflict&) {
+          triangles.clear();
+        }
+      if (triangles.empty())
         throw EditConflict(
             "feature" + std::string(features.size() > 1 ? "s " : " ") + names(features) + " cannot close over the gap: " +
             (winds ? "it would go round the cylinder"
                    : "its border there is not a hole in that face (it would take the face's outline with it)"));
-      for (const std::array<int, 3>& t : close_polygon(chart)) {
+      for (const std::array<int, 3>& t : triangles) {
         out.faces.push_back({polygon[t[0]], polygon[t[1]], polygon[t[2]]});
         out.hosts.push_back(host);
       }
@@ -423,6 +416,7 @@ class GapCloser {
   const std::set<std::pair<int, int>>& g1_;
   const double spacing_;
   double length_ = 0.0;
+  Eigen::Vector3d low_, high_;             // the gap border's bounding box, grown by the tolerance
   std::vector<int> class_;                 // per feature: union-find parent over identical hosts
   std::map<int, std::vector<int>> faces_;  // per feature across the loop: its faces
   std::vector<Arc> arcs_;

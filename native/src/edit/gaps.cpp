@@ -26,9 +26,6 @@ namespace {
 // >= 20 deg), 5 rounds 99.13 %, 8 rounds no more.
 constexpr int kClosingRounds = 5;
 
-double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
-}
 
 std::string feature_list(const std::set<int>& features) {
   std::string s;
@@ -93,60 +90,69 @@ std::vector<int> gap_hosts(const TriangleMesh& mesh, const std::vector<int>& gro
   return hosts;
 }
 
-// Ear clipping: each ear is the convex corner whose triangle
-// holds no other corner; among the ears, the one of the largest smallest angle goes first, which
-// keeps the fan from slivering before the remeshing. O(n^3) on an n-gon: gaps are loops of tens to
-// a few hundred edges.
-std::vector<std::array<int, 3>> close_polygon(const std::vector<Eigen::Vector2d>& p) {
-  std::vector<int> ring(p.size());
-  for (size_t i = 0; i < p.size(); ++i) ring[i] = static_cast<int>(i);
-  std::vector<std::array<int, 3>> out;
-  auto smallest_angle = [&](int a, int b, int c) {
-    const Eigen::Vector2d u = p[b] - p[a], v = p[c] - p[b], w = p[a] - p[c];
-    auto angle = [](const Eigen::Vector2d& x, const Eigen::Vector2d& y) {
-      return std::atan2(std::abs(x.x() * y.y() - x.y() * y.x()), -x.dot(y));
-    };
-    return std::min({angle(w, u), angle(u, v), angle(v, w)});
-  };
-  while (ring.size() > 3) {
-    const size_t n = ring.size();
-    int best = -1;
-    double best_angle = -1.0;
-    for (size_t i = 0; i < n; ++i) {
-      const int a = ring[(i + n - 1) % n], b = ring[i], c = ring[(i + 1) % n];
-      if (cross2(p[a], p[b], p[c]) <= 0.0) continue;  // reflex or flat: not an ear
-      bool empty = true;
-      for (size_t j = 0; j < n && empty; ++j) {
-        const int x = ring[j];
-        if (x == a || x == b || x == c) continue;
-        empty = !(cross2(p[a], p[b], p[x]) >= 0.0 && cross2(p[b], p[c], p[x]) >= 0.0 && cross2(p[c], p[a], p[x]) >= 0.0);
-      }
-      if (!empty) continue;
-      const double angle = smallest_angle(a, b, c);
-      if (angle > best_angle) {
-        best_angle = angle;
-        best = static_cast<int>(i);
-      }
-    }
-    // A polygon has two ears (Meisters); none found means rounding on nearly flat corners: the
-    // most convex corner goes.
-    if (best < 0) {
-      double most = -std::numeric_limits<double>::infinity();
-      for (size_t i = 0; i < n; ++i) {
-        const double turn = cross2(p[ring[(i + n - 1) % n]], p[ring[i]], p[ring[(i + 1) % n]]);
-        if (turn > most) {
-          most = turn;
-          best = static_cast<int>(i);
-        }
-      }
-    }
-    out.push_back({ring[(best + n - 1) % n], ring[best], ring[(best + 1) % n]});
-    ring.erase(ring.begin() + best);
-  }
-  out.push_back({ring[0], ring[1], ring[2]});
-  return out;
+namespace {
+
+double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
 }
 
+// Whether segments pq and rs cross or touch.
+bool segments_meet(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Eigen::Vector2d& r,
+                   const Eigen::Vector2d& s) {
+  const double d1 = cross2(p, q, r), d2 = cross2(p, q, s), d3 = cross2(r, s, p), d4 = cross2(r, s, q);
+  if (((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0)) && d1 != 0 && d2 != 0 && d3 != 0 && d4 != 0) return true;
+  auto within = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& x) {
+    return x.x() >= std::min(a.x(), b.x()) && x.x() <= std::max(a.x(), b.x()) && x.y() >= std::min(a.y(), b.y()) &&
+           x.y() <= std::max(a.y(), b.y());
+  };
+  return (d1 == 0 && within(p, q, r)) || (d2 == 0 && within(p, q, s)) || (d3 == 0 && within(r, s, p)) ||
+         (d4 == 0 && within(r, s, q));
+}
+
+}  // namespace
+
+// Segments are binned in a grid of cells as large as their mean length, and only segments that
+// share a cell are tested: linear in the number of segments when they are spread about evenly, as
+// a gap's border is.
+bool simple_polygon(const std::vector<Eigen::Vector2d>& p) {
+  const long n = static_cast<long>(p.size());
+  if (n < 3) return false;
+  Eigen::Vector2d low = p[0], high = p[0];
+  double mean = 0.0;
+  for (long i = 0; i < n; ++i) {
+    low = low.cwiseMin(p[i]);
+    high = high.cwiseMax(p[i]);
+    mean += (p[(i + 1) % n] - p[i]).norm() / static_cast<double>(n);
+  }
+  if (!(mean > 0.0)) return false;
+  // At most about 4n cells: a long thin polygon does not get a grid larger than its segments.
+  const double cell = std::max(mean, std::sqrt((high - low).prod() / (4.0 * static_cast<double>(n))));
+  std::map<std::pair<long, long>, std::vector<long>> grid;
+  for (long i = 0; i < n; ++i) {
+    const Eigen::Vector2d a = p[i], b = p[(i + 1) % n];
+    const long x0 = static_cast<long>(std::floor((std::min(a.x(), b.x()) - low.x()) / cell));
+    const long x1 = static_cast<long>(std::floor((std::max(a.x(), b.x()) - low.x()) / cell));
+    const long y0 = static_cast<long>(std::floor((std::min(a.y(), b.y()) - low.y()) / cell));
+    const long y1 = static_cast<long>(std::floor((std::max(a.y(), b.y()) - low.y()) / cell));
+    for (long x = x0; x <= x1; ++x)
+      for (long y = y0; y <= y1; ++y) grid[{x, y}].push_back(i);
+  }
+  for (const auto& [key, segments] : grid)
+    for (size_t a = 0; a < segments.size(); ++a)
+      for (size_t b = a + 1; b < segments.size(); ++b) {
+        const long i = segments[a], j = segments[b];
+        const long gap = std::abs(i - j);
+        if (gap == 1 || gap == n - 1) {
+          // Neighbours share a corner; they meet elsewhere only when they fold back onto each other.
+          const long first = gap == 1 ? std::min(i, j) : std::max(i, j);
+          const Eigen::Vector2d &u = p[first], &v = p[(first + 1) % n], &w = p[(first + 2) % n];
+          if (cross2(u, v, w) == 0.0 && (v - u).dot(w - v) < 0.0) return false;
+          continue;
+        }
+        if (segments_meet(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n])) return false;
+      }
+  return true;
+}
 
 namespace {
 

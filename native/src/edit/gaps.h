@@ -31,14 +31,14 @@ void take_rim_triangles(const TriangleMesh& mesh, int group, std::vector<int>& l
 std::vector<int> gap_hosts(const TriangleMesh& mesh, const std::vector<int>& labels, int group,
                            const std::vector<Surface>& surfaces, const std::vector<BorderLoop>& loops);
 
-// The triangles that close a simple polygon given counter-clockwise by its points in a chart, as
-// indices into `polygon`, counter-clockwise (ear clipping, the best-shaped ear first).
-std::vector<std::array<int, 3>> close_polygon(const std::vector<Eigen::Vector2d>& polygon);
+// Whether the closed polygon `p` (points in a chart) is simple: no two of its edges meet except
+// neighbours at their shared corner, and none folds back onto the one before it.
+bool simple_polygon(const std::vector<Eigen::Vector2d>& p);
 
 // The triangles between an outer polygon (counter-clockwise) and an inner one (clockwise) inside
-// it, both given by their points in a chart (a constrained Delaunay triangulation of the ring);
-// indices into outer followed by inner, counter-clockwise. Throws EditConflict when the polygons
-// touch or cross.
+// it, both given by their points in a chart (a constrained Delaunay triangulation of the ring; an
+// empty inner polygon: of the outer one's inside); indices into outer followed by inner,
+// counter-clockwise. Throws EditConflict when the polygons touch or cross (themselves or each other).
 std::vector<std::array<int, 3>> fill_ring(const std::vector<Eigen::Vector2d>& outer,
                                           const std::vector<Eigen::Vector2d>& inner);
 

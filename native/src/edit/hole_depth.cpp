@@ -86,7 +86,7 @@ Decal hole_decal(const Eigen::Vector3d& p0, const Eigen::Vector3d& a, double r, 
   if (!exit_plane) {  // the floor faces back along a, to the hole's opening
     std::vector<Eigen::Vector2d> disc;
     for (int k = 0; k < sectors; ++k) disc.emplace_back(std::cos(2.0 * M_PI * k / sectors), std::sin(2.0 * M_PI * k / sectors));
-    for (const std::array<int, 3>& t : close_polygon(disc)) {
+    for (const std::array<int, 3>& t : fill_ring(disc, {})) {
       faces.push_back({at(rows, t[0]), at(rows, t[2]), at(rows, t[1])});
       decal.labels.push_back(floor);
     }
