@@ -3,7 +3,8 @@ session under xvfb-run: a plate with a round boss is idealized and made a solid;
 is selected, Copy feature opens its group in the task panel (highlighted), an offset previews the
 copy, a placement off the plate is refused in the panel, OK copies it in one undo step and
 regenerates the solid; undo and redo; then Delete feature removes the copy, and save and reopen
-keep both edits.
+keep both edits. Last, Delete feature on a notch in a block's edge: its group sits across the two
+faces of the edge, and deleting it gives the block back.
 """
 import json
 import math
@@ -110,6 +111,32 @@ def run():
     result["reopened"] = {"features": len(reopened.features), "edits": len(json.loads(doc.getObject(name).Edits)),
                           "volume": idealize.make_solid(reopened).volume}
     App.closeDocument(doc.Name)
+
+    # A notch in a block's edge: its group sits across two faces, which meet again when it goes.
+    doc = App.newDocument("Notch")
+    block = Part.makeBox(60, 40, 20).cut(Part.makeBox(10, 8, 6, App.Vector(25, 0, 14)))
+    source = doc.addObject("Mesh::Feature", "Block")
+    source.Mesh = MeshPart.meshFromShape(Shape=block, MaxLength=2.0)
+    doc.recompute()
+    layer = run_on(doc, source, "Idealize_SegmentIdealize")[0]
+    solid = [o for o in run_on(doc, layer, "Idealize_MakeSolid") if hasattr(o, "IdealizeSolid")][0]
+    result["notch_before"] = state(doc, layer, solid)
+    table = json.loads(layer.FeatureTable)
+    floor = [f["id"] for f in table["features"] if f["type"] == "plane" and abs(f["params"]["point"][2] - 14) < 1e-6][0]
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(doc.Name, layer.Name, "Facet%d" % list(layer.Labels).index(floor))
+    Gui.runCommand("Idealize_DeleteFeature")
+    wait(1.5)
+    form = Gui.getMainWindow().findChild(QtGui.QWidget, "FeatureGroup")
+    members = form.findChild(QtGui.QListWidget, "members")
+    result["notch_group_text"] = form.findChild(QtGui.QLabel, "group").text()
+    result["notch_ticked"] = sum(members.item(i).checkState() == QtCore.Qt.Checked for i in range(members.count()))
+    result["notch_status"] = form.findChild(QtGui.QLabel, "status").text()
+    click_ok()
+    wait(1.0)
+    result["notch_deleted"] = state(doc, layer, solid)
+    result["notch_deleted"]["undo_name"] = doc.UndoNames[0] if doc.UndoNames else None
+    App.closeDocument(doc.Name)
 '''
 
 
@@ -162,3 +189,14 @@ def test_delete_removes_the_copy_and_both_edits_survive_reopening(groups_run):
     assert deleted["volume"] == pytest.approx(before["volume"], rel=1e-6) and deleted["valid"]
     assert reopened["edits"] == 2 and reopened["features"] == before["features"]
     assert reopened["volume"] == pytest.approx(before["volume"], rel=1e-6)
+
+
+def test_delete_feature_takes_a_notch_out_of_an_edge(groups_run):
+    before, deleted = groups_run["notch_before"], groups_run["notch_deleted"]
+    assert groups_run["notch_ticked"] == 4  # floor, back wall, two side walls
+    assert groups_run["notch_group_text"].count("feature") >= 3  # on the block's top and front faces
+    assert groups_run["notch_status"].startswith("Preview"), groups_run["notch_status"]
+    assert deleted["undo_name"] == "Delete feature" and deleted["edits"] == 1
+    assert deleted["features"] == before["features"] - 4
+    assert deleted["valid"] and deleted["faces"] == 6
+    assert deleted["volume"] == pytest.approx(60 * 40 * 20, rel=1e-6)
