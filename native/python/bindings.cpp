@@ -193,6 +193,7 @@ PYBIND11_MODULE(_native, m) {
   py::register_exception<MeshError>(m, "MeshError", PyExc_ValueError);
   py::register_exception<Cancelled>(m, "Cancelled", PyExc_RuntimeError);
   bind_edit(m);
+  bind_sculpt(m);
 
   // Shared between the thread that runs a computation and the one that shows it: every member is
   // atomic, so none of these needs the GIL held by the computing thread.

@@ -20,4 +20,7 @@ Surface surface_from_params(const std::string& type, const pybind11::dict& param
 // Binds the feature-based editing (edit_features) into the module.
 void bind_edit(pybind11::module_& m);
 
+// Binds sculpting (the Sculptor: brushes with dynamic topology) into the module.
+void bind_sculpt(pybind11::module_& m);
+
 }  // namespace idealize

@@ -1,0 +1,86 @@
+// Bindings of sculpting (native/src/sculpt): a Sculptor holds a mesh between strokes, so that the
+// half-edge structure is built once per sculpting session, not once per stroke.
+#include "conversions.h"
+#include "sculpt/brushes.h"
+#include "sculpt/sculpt_mesh.h"
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <vector>
+
+namespace idealize {
+
+namespace py = pybind11;
+
+namespace {
+
+using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using RowMatrixX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+}  // namespace
+
+void bind_sculpt(py::module_& m) {
+  py::class_<SculptMesh>(m, "Sculptor",
+                         "A mesh being sculpted: strokes of brushes with dynamic topology (native/src/sculpt).")
+      .def(py::init([](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F,
+                       const std::vector<int>& labels) {
+             TriangleMesh mesh;
+             mesh.V = V;
+             mesh.F = F;
+             return std::make_unique<SculptMesh>(mesh, labels);
+           }),
+           py::arg("V"), py::arg("F"), py::arg("labels") = std::vector<int>(),
+           "From V (#V x 3), F (#F x 3, a consistently oriented manifold) and per-face labels (or none). Raises "
+           "MeshError naming the problem otherwise.")
+      .def(
+          "stroke",
+          [](SculptMesh& mesh, const std::string& brush, const Eigen::Ref<const RowMatrixX3d>& points,
+             const Eigen::Ref<const RowMatrixX3d>& directions, double radius, double strength, double spacing,
+             double target_edge_length, bool dynamic_topology) {
+            StrokeOptions options;
+            options.radius = radius;
+            options.strength = strength;
+            options.spacing = spacing;
+            options.target_edge_length = target_edge_length;
+            options.dynamic_topology = dynamic_topology;
+            const Brush b = brush_named(brush);
+            const MatrixX3d p = points, d = directions;
+            StrokeReport report;
+            {
+              py::gil_scoped_release release;
+              report = sculpt_stroke(mesh, b, p, d, options);
+            }
+            py::dict out;
+            out["dabs"] = report.dabs;
+            out["moved_vertices"] = report.moved_vertices;
+            out["target_edge_length"] = report.target_edge_length;
+            return out;
+          },
+          py::arg("brush"), py::arg("points"), py::arg("directions"), py::kw_only(), py::arg("radius"),
+          py::arg("strength") = 0.5, py::arg("spacing") = 0.2, py::arg("target_edge_length") = 0.0,
+          py::arg("dynamic_topology") = true,
+          "Applies a brush (draw, inflate, flatten, smooth, pinch, crease, grab) along a stroke: points (#S x 3), "
+          "view directions (#S x 3, or 0 rows). Returns dict(dabs, moved_vertices, target_edge_length).")
+      .def(
+          "mesh",
+          [](const SculptMesh& mesh) {
+            std::vector<int> labels;
+            std::vector<char> modified;
+            const TriangleMesh out = mesh.compacted(labels, modified);
+            py::dict d;
+            d["V"] = RowMatrixX3d(out.V);
+            d["F"] = RowMatrixX3i(out.F);
+            d["labels"] = labels;
+            d["modified"] = std::vector<bool>(modified.begin(), modified.end());
+            return d;
+          },
+          "The mesh now: dict(V, F, labels (per face, carried from the face it came from), modified (per face: "
+          "changed since the marks were last cleared)).")
+      .def("clear_marks", &SculptMesh::clear_marks, "Forgets which faces were modified.")
+      .def_property_readonly("faces", &SculptMesh::num_faces);
+}
+
+}  // namespace idealize

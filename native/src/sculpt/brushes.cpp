@@ -1,0 +1,253 @@
+// Sculpting brushes along a stroke, with dynamic topology after each dab (see brushes.h).
+#include "sculpt/brushes.h"
+
+#include "sculpt/dynamic_topology.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
+namespace idealize {
+
+namespace {
+
+double falloff(double distance, double radius) {
+  const double t = distance / radius;
+  if (t >= 1.0) return 0.0;
+  const double u = 1.0 - t * t;
+  return u * u * u;
+}
+
+struct Region {
+  std::vector<int> vertices;
+  std::vector<double> weights;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();    // area normal, unit (zero if none)
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  // weighted
+};
+
+int nearest_vertex(const SculptMesh& mesh, const Eigen::Vector3d& c) {
+  int best = -1;
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (int v = 0; v < mesh.vertex_slots(); ++v) {
+    if (mesh.vertex_deleted(v) || mesh.halfedge(v) < 0) continue;
+    const double d = (mesh.position(v) - c).squaredNorm();
+    if (d < best_distance) {
+      best_distance = d;
+      best = v;
+    }
+  }
+  return best;
+}
+
+// The vertices within `radius` of c that the surface joins to the one nearest c, facing against
+// `view` (zero: any), with their falloff weights; `stamp` (per vertex slot) is scratch.
+Region gather(const SculptMesh& mesh, const Eigen::Vector3d& c, const Eigen::Vector3d& view, double radius,
+              std::vector<int>& stamp, int mark) {
+  Region region;
+  const int seed = nearest_vertex(mesh, c);
+  if (seed < 0) return region;
+  if (static_cast<int>(stamp.size()) < mesh.vertex_slots()) stamp.resize(mesh.vertex_slots(), -1);
+  auto takes = [&](int v) {
+    return (mesh.position(v) - c).norm() < radius && (view.isZero() || mesh.vertex_normal(v).dot(view) < 0.0);
+  };
+  if (!takes(seed)) return region;
+  std::vector<int> queue{seed};
+  stamp[seed] = mark;
+  while (!queue.empty()) {
+    const int v = queue.back();
+    queue.pop_back();
+    const double w = falloff((mesh.position(v) - c).norm(), radius);
+    region.vertices.push_back(v);
+    region.weights.push_back(w);
+    region.normal += w * mesh.vertex_normal(v);
+    region.centroid += w * mesh.position(v);
+    const int start = mesh.halfedge(v);
+    int h = start;
+    do {
+      const int u = mesh.to(h);
+      if (stamp[u] != mark) {
+        stamp[u] = mark;
+        if (takes(u)) queue.push_back(u);
+      }
+      h = mesh.rotated(h);
+    } while (h != start);
+  }
+  double total = 0.0;
+  for (double w : region.weights) total += w;
+  if (total > 0.0) region.centroid /= total;
+  if (region.normal.norm() > 0.0) region.normal.normalize();
+  return region;
+}
+
+// Where each vertex of `region` goes under one dab of `brush` (not grab).
+std::vector<Eigen::Vector3d> dab_targets(const SculptMesh& mesh, Brush brush, const Region& region,
+                                         const Eigen::Vector3d& c, double radius, double strength, double spacing) {
+  std::vector<Eigen::Vector3d> out(region.vertices.size());
+  const Eigen::Vector3d& n = region.normal;
+  for (size_t i = 0; i < region.vertices.size(); ++i) {
+    const int v = region.vertices[i];
+    const Eigen::Vector3d p = mesh.position(v);
+    const double w = region.weights[i];
+    Eigen::Vector3d q = p;
+    switch (brush) {
+      case Brush::Draw:
+        q = p + strength * w * spacing * n;
+        break;
+      case Brush::Inflate:
+        q = p + strength * w * spacing * mesh.vertex_normal(v);
+        break;
+      case Brush::Flatten: {
+        const double share = std::min(1.0, std::abs(strength) * w * spacing / radius);
+        q = p - share * n.dot(p - region.centroid) * n;
+        break;
+      }
+      case Brush::Smooth: {
+        Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+        int count = 0;
+        const int start = mesh.halfedge(v);
+        int h = start;
+        do {
+          centroid += mesh.position(mesh.to(h));
+          ++count;
+          h = mesh.rotated(h);
+        } while (h != start);
+        q = p + std::min(1.0, std::abs(strength) * w) * (centroid / count - p);
+        break;
+      }
+      case Brush::Pinch:
+      case Brush::Crease: {
+        Eigen::Vector3d towards = c - p;
+        towards -= n.dot(towards) * n;
+        q = p + std::min(1.0, std::abs(strength) * w * spacing / radius) * towards;
+        if (brush == Brush::Crease) q -= strength * w * spacing * n;
+        break;
+      }
+      case Brush::Grab:
+        break;
+    }
+    out[i] = q;
+  }
+  return out;
+}
+
+void mark_around(SculptMesh& mesh, int v) {
+  const int start = mesh.halfedge(v);
+  int h = start;
+  do {
+    if (mesh.face(h) >= 0) mesh.mark(mesh.face(h));
+    h = mesh.rotated(h);
+  } while (h != start);
+}
+
+// The median length of the edges out of `vertices` (all of the mesh's when empty).
+double median_edge_length(const SculptMesh& mesh, const std::vector<int>& vertices) {
+  std::vector<double> lengths;
+  auto add = [&](int v) {
+    const int start = mesh.halfedge(v);
+    int h = start;
+    do {
+      lengths.push_back((mesh.position(mesh.to(h)) - mesh.position(v)).norm());
+      h = mesh.rotated(h);
+    } while (h != start);
+  };
+  for (int v : vertices) add(v);
+  if (lengths.empty())
+    for (int v = 0; v < mesh.vertex_slots(); ++v)
+      if (!mesh.vertex_deleted(v) && mesh.halfedge(v) >= 0) add(v);
+  if (lengths.empty()) return 0.0;
+  std::nth_element(lengths.begin(), lengths.begin() + static_cast<long>(lengths.size() / 2), lengths.end());
+  return lengths[lengths.size() / 2];
+}
+
+// The dabs' centres and view directions: every `step` along the polyline of `points`.
+std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> dabs_along(const MatrixX3d& points, const MatrixX3d& directions,
+                                                                    double step) {
+  auto view = [&](Eigen::Index i) {
+    return directions.rows() ? Eigen::Vector3d(directions.row(i).transpose().normalized()) : Eigen::Vector3d::Zero();
+  };
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> out{{points.row(0).transpose(), view(0)}};
+  double carried = 0.0;  // distance since the last dab
+  for (Eigen::Index i = 1; i < points.rows(); ++i) {
+    const Eigen::Vector3d a = points.row(i - 1).transpose(), b = points.row(i).transpose();
+    const double length = (b - a).norm();
+    double at = step - carried;
+    for (; at <= length; at += step) {
+      const double t = at / length;
+      Eigen::Vector3d d = (1.0 - t) * view(i - 1) + t * view(i);
+      if (d.norm() > 0.0) d.normalize();
+      out.emplace_back((1.0 - t) * a + t * b, d);
+    }
+    carried = length - (at - step);
+  }
+  return out;
+}
+
+}  // namespace
+
+Brush brush_named(const std::string& name) {
+  static const std::pair<const char*, Brush> brushes[] = {
+      {"draw", Brush::Draw},   {"inflate", Brush::Inflate}, {"flatten", Brush::Flatten}, {"smooth", Brush::Smooth},
+      {"pinch", Brush::Pinch}, {"crease", Brush::Crease},   {"grab", Brush::Grab}};
+  for (const auto& [n, b] : brushes)
+    if (name == n) return b;
+  throw std::invalid_argument("unknown brush '" + name + "': draw, inflate, flatten, smooth, pinch, crease or grab");
+}
+
+StrokeReport sculpt_stroke(SculptMesh& mesh, Brush brush, const MatrixX3d& points, const MatrixX3d& directions,
+                           const StrokeOptions& options) {
+  if (!(options.radius > 0.0)) throw std::invalid_argument("the brush radius must be positive");
+  if (!(options.spacing > 0.0)) throw std::invalid_argument("the dab spacing must be positive");
+  if (points.rows() == 0) throw std::invalid_argument("a stroke needs at least one point");
+  if (directions.rows() != 0 && directions.rows() != points.rows())
+    throw std::invalid_argument("one view direction per stroke point, or none");
+  const double step = options.spacing * options.radius;
+  const auto dabs = dabs_along(points, directions, step);
+  StrokeReport report;
+  std::vector<int> stamp(mesh.vertex_slots(), -1);
+  int mark = 0;
+  const Region first = gather(mesh, dabs[0].first, dabs[0].second, options.radius, stamp, mark++);
+  report.target_edge_length =
+      options.target_edge_length > 0.0 ? options.target_edge_length : median_edge_length(mesh, first.vertices);
+  DynamicTopologyOptions topology;
+  topology.target_edge_length = report.target_edge_length;
+  std::vector<char> active(mesh.vertex_slots(), 0);
+  auto remesh = [&](const std::vector<int>& vertices, int rounds) {
+    if (!options.dynamic_topology || !(topology.target_edge_length > 0.0)) return;
+    const int slots = mesh.vertex_slots();
+    for (int v : vertices) active[v] = 1;
+    topology.rounds = rounds;
+    remesh_region(mesh, active, topology);
+    for (int v : vertices) active[v] = 0;
+    std::fill(active.begin() + std::min<long>(slots, static_cast<long>(active.size())), active.end(), 0);
+  };
+  if (brush == Brush::Grab) {
+    // The vertices under the first dab follow the stroke; the mesh catches up at the end.
+    for (size_t k = 1; k < dabs.size(); ++k) {
+      const Eigen::Vector3d delta = options.strength * (dabs[k].first - dabs[k - 1].first);
+      for (size_t i = 0; i < first.vertices.size(); ++i) mesh.position(first.vertices[i]) += first.weights[i] * delta;
+    }
+    for (int v : first.vertices) mark_around(mesh, v);
+    report.dabs = static_cast<int>(dabs.size());
+    report.moved_vertices = static_cast<int>(first.vertices.size());
+    // Two rounds: a grab stretches edges by the whole stroke at once.
+    remesh(first.vertices, 2);
+    return report;
+  }
+  for (const auto& [centre, view] : dabs) {
+    const Region region = gather(mesh, centre, view, options.radius, stamp, mark++);
+    if (region.vertices.empty()) continue;
+    const std::vector<Eigen::Vector3d> targets =
+        dab_targets(mesh, brush, region, centre, options.radius, options.strength, step);
+    for (size_t i = 0; i < region.vertices.size(); ++i) mesh.position(region.vertices[i]) = targets[i];
+    for (int v : region.vertices) mark_around(mesh, v);
+    ++report.dabs;
+    report.moved_vertices += static_cast<int>(region.vertices.size());
+    remesh(region.vertices, 1);
+    if (static_cast<int>(stamp.size()) < mesh.vertex_slots()) stamp.resize(mesh.vertex_slots(), -1);
+  }
+  return report;
+}
+
+}  // namespace idealize
