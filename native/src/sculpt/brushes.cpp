@@ -23,8 +23,11 @@ double falloff(double distance, double radius) {
 struct Region {
   std::vector<int> vertices;
   std::vector<double> weights;
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();    // area normal, unit (zero if none)
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  // weighted
+  // The area's plane, as Blender's sculpt mode takes it: through the mean of the vertices under the
+  // brush, across the mean of their normals (unweighted: weighting by the falloff would lift the
+  // plane onto the very bump flatten is to take down).
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();    // unit (zero if none)
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
 };
 
 int nearest_vertex(const SculptMesh& mesh, const Eigen::Vector3d& c) {
@@ -61,8 +64,8 @@ Region gather(const SculptMesh& mesh, const Eigen::Vector3d& c, const Eigen::Vec
     const double w = falloff((mesh.position(v) - c).norm(), radius);
     region.vertices.push_back(v);
     region.weights.push_back(w);
-    region.normal += w * mesh.vertex_normal(v);
-    region.centroid += w * mesh.position(v);
+    region.normal += mesh.vertex_normal(v);
+    region.centroid += mesh.position(v);
     const int start = mesh.halfedge(v);
     int h = start;
     do {
@@ -74,9 +77,7 @@ Region gather(const SculptMesh& mesh, const Eigen::Vector3d& c, const Eigen::Vec
       h = mesh.rotated(h);
     } while (h != start);
   }
-  double total = 0.0;
-  for (double w : region.weights) total += w;
-  if (total > 0.0) region.centroid /= total;
+  region.centroid /= static_cast<double>(region.vertices.size());
   if (region.normal.norm() > 0.0) region.normal.normalize();
   return region;
 }
@@ -223,11 +224,9 @@ StrokeReport sculpt_stroke(SculptMesh& mesh, Brush brush, const MatrixX3d& point
     std::fill(active.begin() + std::min<long>(slots, static_cast<long>(active.size())), active.end(), 0);
   };
   if (brush == Brush::Grab) {
-    // The vertices under the first dab follow the stroke; the mesh catches up at the end.
-    for (size_t k = 1; k < dabs.size(); ++k) {
-      const Eigen::Vector3d delta = options.strength * (dabs[k].first - dabs[k - 1].first);
-      for (size_t i = 0; i < first.vertices.size(); ++i) mesh.position(first.vertices[i]) += first.weights[i] * delta;
-    }
+    // The vertices under the first point follow the stroke to its last; the mesh catches up at the end.
+    const Eigen::Vector3d delta = options.strength * (points.row(points.rows() - 1) - points.row(0)).transpose();
+    for (size_t i = 0; i < first.vertices.size(); ++i) mesh.position(first.vertices[i]) += first.weights[i] * delta;
     for (int v : first.vertices) mark_around(mesh, v);
     report.dabs = static_cast<int>(dabs.size());
     report.moved_vertices = static_cast<int>(first.vertices.size());

@@ -14,7 +14,8 @@
 //   smooth:  towards the centroid of its neighbours, by a share s w (at most all of it);
 //   pinch:   towards c in the tangent plane, by a share s w D / radius;
 //   crease:  pinch, and dig along the area normal by s w D;
-//   grab:    the vertices under the first dab follow the stroke: by w s times each step.
+//   grab:    the vertices under the first point follow the stroke: by w s times the way from its
+//            first point to its last.
 // Scaling by D makes a stroke's effect independent of how densely it is sampled.
 #pragma once
 

@@ -1,0 +1,169 @@
+"""Sculpting brushes with dynamic topology (issue 53): each brush does what it says inside its
+radius and nothing outside it; random strokes keep the mesh closed, manifold, consistently oriented
+and well shaped; bad input is refused with a message."""
+import numpy as np
+import pytest
+
+import idealize
+import shapes
+from idealize import sculpt
+
+RADIUS = 10.0
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    V, F = shapes.icosphere(RADIUS, 4)  # 5,120 faces, edges about 0.8
+    return idealize.Mesh(V, F)
+
+
+def topology(mesh):
+    """(edges with other than two faces, directed edges used twice, Euler characteristic)."""
+    F = mesh.faces
+    directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    _, counts = np.unique(np.sort(directed, axis=1), axis=0, return_counts=True)
+    repeated = len(directed) - len(np.unique(directed, axis=0))
+    used = np.unique(F)
+    return int(np.sum(counts != 2)), int(repeated), len(used) - len(counts) + len(F)
+
+
+def view_at(point):
+    """A stroke point on the sphere and the view direction there (from outside, at the centre)."""
+    point = np.asarray(point, float)
+    return point / np.linalg.norm(point) * RADIUS, -point / np.linalg.norm(point)
+
+
+def stroke_over(a, b, n=5):
+    """A stroke along the great circle from a to b (unit directions), with its view directions."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    points = [view_at((1 - t) * a + t * b) for t in np.linspace(0, 1, n)]
+    return np.array([p for p, _ in points]), np.array([d for _, d in points])
+
+
+def untouched(before, after, centre, reach):
+    """Whether every vertex of `before` farther than `reach` from `centre` is still a vertex of
+    `after`, at exactly the same place."""
+    far = before.vertices[np.linalg.norm(before.vertices - centre, axis=1) > reach]
+    kept = {tuple(v) for v in after.vertices}
+    return all(tuple(v) in kept for v in far)
+
+
+def test_draw_raises_the_surface_under_the_brush_and_nothing_else(sphere):
+    points, directions = stroke_over([0, 0, 1], [0.3, 0, 1])
+    vertices = sphere.vertices.copy()
+    mesh, modified = sculpt.stroke(sphere, "draw", points, directions, radius=3.0, strength=0.5)
+    assert np.array_equal(sphere.vertices, vertices)  # the input is not modified
+    radii = np.linalg.norm(mesh.vertices, axis=1)
+    assert radii.max() > RADIUS + 0.2
+    # Beyond the radius from every stroke point nothing moved (vertices there are the same).
+    assert untouched(sphere, mesh, points[0], 3.0 + np.linalg.norm(points[-1] - points[0]))
+    assert 0 < modified.sum() < len(mesh.faces) / 4
+    dug, _ = sculpt.stroke(sphere, "draw", points, directions, radius=3.0, strength=-0.5)
+    assert np.linalg.norm(dug.vertices, axis=1).min() < RADIUS - 0.2
+
+
+def test_flatten_takes_a_bump_down_and_smooth_evens_out_noise(sphere):
+    points, directions = stroke_over([0, 0, 1], [0.2, 0, 1])
+    sculptor = sculpt.Sculptor(sphere)
+    for _ in range(3):
+        sculptor.stroke("draw", points, directions, radius=3.0, strength=1.0)
+    bump = np.linalg.norm(sculptor.mesh().vertices, axis=1).max() - RADIUS
+    across = stroke_over([-0.4, 0, 1], [0.6, 0, 1], 9)  # over the bump, one radius beyond each side
+    for _ in range(3):
+        sculptor.stroke("flatten", *across, radius=4.0, strength=1.0)
+    assert np.linalg.norm(sculptor.mesh().vertices, axis=1).max() - RADIUS < 0.5 * bump
+
+    rng = np.random.default_rng(3)
+    V = sphere.vertices + rng.normal(0, 0.05, sphere.vertices.shape)
+    noisy = idealize.Mesh(V, sphere.faces)
+    near = np.linalg.norm(V - [0, 0, RADIUS], axis=1) < 2.0
+    before = np.std(np.linalg.norm(V[near], axis=1))
+    smoothed, _ = sculpt.stroke(noisy, "smooth", *stroke_over([0, 0, 1], [0.01, 0, 1], 2), radius=4.0, strength=1.0)
+    W = smoothed.vertices
+    after = np.std(np.linalg.norm(W[np.linalg.norm(W - [0, 0, RADIUS], axis=1) < 2.0], axis=1))
+    assert after < 0.5 * before
+
+
+def test_inflate_grows_pinch_draws_together_grab_follows(sphere):
+    def volume(mesh):
+        V, F = mesh.vertices, mesh.faces
+        return np.einsum("ij,ij->i", V[F[:, 0]], np.cross(V[F[:, 1]], V[F[:, 2]])).sum() / 6
+
+    points, directions = stroke_over([0, 0, 1], [0.3, 0, 1])
+    inflated, _ = sculpt.stroke(sphere, "inflate", points, directions, radius=3.0, strength=0.5)
+    assert volume(inflated) > volume(sphere) + 1.0
+    # Pinch along a line: the vertices near it close in on it (their distance to the stroke's
+    # plane y = 0 shrinks).
+    band = lambda V: np.abs(V[(np.abs(V[:, 1]) < 2.0) & (V[:, 0] > 0.0) & (V[:, 0] < 2.5) & (V[:, 2] > 8.5), 1]).mean()
+    pinched, _ = sculpt.stroke(sphere, "pinch", points, directions, radius=3.0, strength=1.0)
+    assert band(pinched.vertices) < 0.9 * band(sphere.vertices)
+    creased, _ = sculpt.stroke(sphere, "crease", points, directions, radius=3.0, strength=1.0)
+    assert volume(creased) < volume(sphere)
+    # Grab: the vertex under the first point moves with the stroke.
+    top = np.argmax(sphere.vertices[:, 2])
+    start = sphere.vertices[top]
+    grabbed, _ = sculpt.stroke(sphere, "grab", [start, start + [0, 0, 2.0]], None, radius=3.0, strength=1.0)
+    # (The dynamic topology's relaxation then slides vertices along the surface, not off it.)
+    assert grabbed.vertices[:, 2].max() == pytest.approx(start[2] + 2.0, abs=0.05)
+
+
+def test_random_strokes_keep_the_mesh_closed_manifold_and_well_shaped(sphere):
+    rng = np.random.default_rng(7)
+    sculptor = sculpt.Sculptor(sphere)
+    for i in range(200):
+        a = rng.normal(size=3)
+        b = a / np.linalg.norm(a) + rng.normal(0, 0.2, 3)
+        points, directions = stroke_over(a / np.linalg.norm(a), b, 4)
+        brush = sculpt.BRUSHES[i % len(sculpt.BRUSHES)]
+        if brush == "grab":
+            points = [points[0], points[0] + rng.normal(0, 0.5, 3)]
+            directions = None
+        sculptor.stroke(brush, points, directions, radius=rng.uniform(1.5, 4.0),
+                        strength=rng.uniform(0.2, 1.0) * rng.choice([1, -1]))
+    mesh, modified = sculptor.mesh(), sculptor.modified()
+    assert topology(mesh) == (0, 0, 2)  # closed, oriented, still a sphere
+    angles = shapes.min_angles(mesh.vertices, mesh.faces)
+    assert modified.mean() > 0.5
+    assert np.mean(angles >= 20.0) >= 0.99
+    assert np.all(np.isfinite(mesh.vertices))
+
+
+def test_the_same_strokes_give_the_same_mesh(sphere):
+    points, directions = stroke_over([0, 1, 0], [0, 1, 0.4])
+    first = [sculpt.stroke(sphere, brush, points, directions, radius=2.5, strength=0.7)[0] for brush in ("draw", "pinch")]
+    again = [sculpt.stroke(sphere, brush, points, directions, radius=2.5, strength=0.7)[0] for brush in ("draw", "pinch")]
+    for a, b in zip(first, again):
+        assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+
+
+def test_bad_input_is_refused_with_a_message(sphere):
+    points, directions = stroke_over([0, 0, 1], [0.1, 0, 1])
+    with pytest.raises(ValueError, match="unknown brush"):
+        sculpt.stroke(sphere, "carve", points, directions, radius=2.0)
+    with pytest.raises(ValueError, match="radius must be positive"):
+        sculpt.stroke(sphere, "draw", points, directions, radius=0.0)
+    with pytest.raises(ValueError, match="one view direction per stroke point"):
+        sculpt.stroke(sphere, "draw", points, directions[:2], radius=2.0)
+    with pytest.raises(ValueError, match="finite"):
+        sculpt.stroke(sphere, "draw", [[np.nan, 0, 0]], None, radius=2.0)
+    # Three faces on one edge: not a manifold.
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    with pytest.raises(idealize.MeshError, match="more than two faces"):
+        sculpt.Sculptor(idealize.Mesh(V, F))
+
+
+@pytest.mark.skipif(shapes.freecad() is None, reason="FreeCAD is not installed")
+def test_a_layer_keeps_its_labels_where_the_stroke_did_not_reach():
+    FreeCAD, Part, _ = shapes.freecad()
+    layer, _ = shapes.quality_layer(Part.makeBox(60, 40, 20))
+    top = [f["id"] for f in layer.features if f["params"]["normal"][2] > 0.99][0]
+    sculptor = sculpt.Sculptor(layer)
+    sculptor.stroke("draw", [[20, 20, 20], [40, 20, 20]], [[0, 0, -1]] * 2, radius=4.0, strength=0.5)
+    mesh, labels, modified = sculptor.mesh(), sculptor.labels(), sculptor.modified()
+    assert labels[modified].tolist() == [top] * int(modified.sum())  # new faces take the top's label
+    # The faces the stroke did not change are the layer's, labels and all.
+    before = {tuple(sorted(map(tuple, layer.idealized_vertices[f]))): l
+              for f, l in zip(layer.mesh.faces, layer.labels)}
+    for face, label in zip(mesh.faces[~modified], labels[~modified]):
+        assert before[tuple(sorted(map(tuple, mesh.vertices[face])))] == label
