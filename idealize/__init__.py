@@ -22,10 +22,11 @@ from .curvature import vertex_curvature
 from .features import FeatureLayer, idealize
 from .mesh import Mesh, MeshError, load_mesh
 from .progress import Cancelled, Progress
+from .reidealize import reidealize
 from .segmentation import Segmentation, segment
 
 __all__ = ["Cancelled", "FeatureLayer", "feature_layer", "Mesh", "MeshError", "idealize", "load_mesh",
-           "make_feature_layer", "make_solid", "Progress", "Segmentation", "segment", "Solid", "vertex_curvature"]
+           "make_feature_layer", "make_solid", "Progress", "reidealize", "Segmentation", "segment", "Solid", "vertex_curvature"]
 __version__ = "0.1.0"
 
 

@@ -167,3 +167,79 @@ def test_a_layer_keeps_its_labels_where_the_stroke_did_not_reach():
               for f, l in zip(layer.mesh.faces, layer.labels)}
     for face, label in zip(mesh.faces[~modified], labels[~modified]):
         assert before[tuple(sorted(map(tuple, mesh.vertices[face])))] == label
+
+
+@pytest.fixture(scope="module")
+def box_layer():
+    if shapes.freecad() is None:
+        pytest.skip("FreeCAD is not installed")
+    FreeCAD, Part, _ = shapes.freecad()
+    return shapes.quality_layer(Part.makeBox(60, 40, 20))[0]
+
+
+@pytest.fixture(scope="module")
+def bumped(box_layer):
+    """The box's top with a bump drawn on it, re-idealized."""
+    sculptor = sculpt.Sculptor(box_layer)
+    for _ in range(3):
+        sculptor.stroke("draw", [[25, 20, 20], [35, 20, 20]], [[0, 0, -1]] * 2, radius=6.0, strength=1.0)
+    return sculptor, idealize.reidealize(box_layer, sculptor.mesh(), sculptor.modified())
+
+
+def test_reidealizing_an_unchanged_mesh_changes_nothing(box_layer):
+    same = idealize.reidealize(box_layer, box_layer.idealized_mesh())
+    assert not same.changed_faces.any()
+    assert np.array_equal(same.labels, box_layer.labels)
+    assert [f["params"] for f in same.features] == [f["params"] for f in box_layer.features]
+
+
+def test_a_bump_becomes_new_features_and_the_rest_keeps_ids_and_parameters(box_layer, bumped):
+    sculptor, layer = bumped
+    count = len(box_layer.features)
+    assert len(layer.features) > count
+    for old, new in zip(box_layer.features, layer.features):
+        assert new["id"] == old["id"] and new["type"] == old["type"] and new["params"] == old["params"]
+    # Unmodified faces keep their features; the bump's faces are new features or the top's.
+    modified = sculptor.modified()
+    assert np.array_equal(np.asarray(layer.labels)[~modified], sculptor.labels()[~modified])
+    top = [f["id"] for f in box_layer.features if f["params"]["normal"][2] > 0.99][0]
+    assert set(np.asarray(layer.labels)[modified].tolist()) <= {top} | set(range(count, len(layer.features)))
+    made = idealize.make_solid(layer)
+    assert made.solid and not made.problems
+
+
+def test_a_bump_taken_back_into_its_plane_is_that_plane_again(box_layer, bumped):
+    """Without flags: the faces that are not the layer's triangles are the modified ones."""
+    sculptor, layer = bumped
+    mesh = sculptor.mesh()
+    V = mesh.vertices.copy()
+    V[:, 2] = np.minimum(V[:, 2], 20.0)  # the bump pressed flat into the top
+    flat = idealize.reidealize(layer, idealize.Mesh(V, mesh.faces))
+    top = [f["id"] for f in box_layer.features if f["params"]["normal"][2] > 0.99][0]
+    labels = np.asarray(flat.labels)
+    assert set(labels[flat.changed_faces].tolist()) == {top}
+    assert all(f["triangles"] == 0 for f in flat.features[len(box_layer.features):])
+    assert flat.features[top]["params"] == box_layer.features[top]["params"]
+    made = idealize.make_solid(flat)
+    assert made.solid and made.faces == 6 and made.volume == pytest.approx(60 * 40 * 20, rel=1e-6)
+
+
+def test_a_mesh_sculpted_elsewhere_and_read_back_keeps_the_unchanged_features(box_layer, bumped, tmp_path):
+    """The round trip through another program: written as STL (float32), read back, no flags."""
+    sculptor, _ = bumped
+    mesh = sculptor.mesh()
+    path = tmp_path / "sculpted.stl"
+    tri = mesh.vertices[mesh.faces].astype(np.float32)
+    normals = np.zeros((len(tri), 3), np.float32)
+    with open(path, "wb") as out:
+        out.write(b"\0" * 80 + np.uint32(len(tri)).tobytes())
+        record = np.zeros(len(tri), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
+        record["n"], record["v"] = normals, tri
+        out.write(record.tobytes())
+    back = idealize.reidealize(box_layer, idealize.load_mesh(str(path)))
+    kept = ~back.changed_faces
+    # What the sculptor did not modify is recognised as the layer's own, labels and all.
+    assert kept.sum() >= (~sculptor.modified()).sum() * 0.99
+    for old, new in zip(box_layer.features, back.features):
+        assert new["params"] == old["params"]
+    assert idealize.make_solid(back).solid

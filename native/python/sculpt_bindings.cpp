@@ -3,6 +3,7 @@
 #include "conversions.h"
 #include "sculpt/brushes.h"
 #include "sculpt/sculpt_mesh.h"
+#include "fit/surface.h"
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
@@ -81,6 +82,22 @@ void bind_sculpt(py::module_& m) {
           "changed since the marks were last cleared)).")
       .def("clear_marks", &SculptMesh::clear_marks, "Forgets which faces were modified.")
       .def_property_readonly("faces", &SculptMesh::num_faces);
+
+  m.def(
+      "onto_surface",
+      [](const std::string& type, const py::dict& params, const Eigen::Ref<const RowMatrixX3d>& points) {
+        const Surface surface = surface_from_params(type, params);
+        RowMatrixX3d closest(points.rows(), 3);
+        Eigen::VectorXd distance(points.rows());
+        for (Eigen::Index i = 0; i < points.rows(); ++i) {
+          const Eigen::Vector3d p = points.row(i).transpose();
+          closest.row(i) = closest_point(surface, p).transpose();
+          distance(i) = std::abs(signed_distance(surface, p));
+        }
+        return py::make_tuple(closest, distance);
+      },
+      py::arg("type"), py::arg("params"), py::arg("points"),
+      "(the nearest points on the surface of a feature's type and params to `points` (#P x 3), their distances).");
 }
 
 }  // namespace idealize
