@@ -296,23 +296,26 @@ _OPERATIONS = {"push_pull": ("feature_id", "distance"), "set_parameter": ("featu
                "move": ("feature_ids", "translation", "rotation", "onto"),
                "rotate": ("feature_ids", "degrees", "axis", "center"),
                "delete": ("feature_ids",), "copy": ("feature_ids", "translation", "rotation", "onto"),
-               "set_depth": ("hole_feature_id", "depth", "entry")}
+               "set_depth": ("hole_feature_id", "depth", "entry"), "sculpt": ("strokes",)}
 
 
 def apply(layer, edits):
     """Applies a list of edits in order and returns the last layer: each edit is a dict
-    ``{"op": "push_pull" | "set_parameter" | "move" | "rotate" | "delete" | "copy" | "set_depth", ...}`` with the
-    keyword arguments of the function of that name (and ``keep``, ``remesh``), as a document stores
-    its edit history, e.g. ``{"op": "push_pull", "feature_id": 3, "distance": 5.0}``."""
+    ``{"op": "push_pull" | "set_parameter" | "move" | "rotate" | "delete" | "copy" | "set_depth" | "sculpt",
+    ...}`` with the keyword arguments of the function of that name (and ``keep``, ``remesh``;
+    sculpt: :func:`idealize.sculpt.sculpt`), as a document stores its edit history, e.g.
+    ``{"op": "push_pull", "feature_id": 3, "distance": 5.0}``."""
+    from .sculpt import sculpt
     functions = {"push_pull": push_pull, "set_parameter": set_parameter, "move": move, "rotate": rotate,
-                 "delete": delete, "copy": copy, "set_depth": set_depth}
+                 "delete": delete, "copy": copy, "set_depth": set_depth, "sculpt": sculpt}
     for number, step in enumerate(edits):
         step = dict(step)
         op = step.pop("op", None)
         if op not in functions:
             raise ValueError("edit %d: unknown operation %r; the operations are %s" % (
                 number + 1, op, ", ".join(sorted(functions))))
-        allowed = set(_OPERATIONS[op]) | ({"remesh"} if op in ("delete", "copy", "set_depth") else {"keep", "remesh"})
+        allowed = set(_OPERATIONS[op]) | (set() if op == "sculpt" else {"remesh"} if op in ("delete", "copy", "set_depth")
+                                          else {"keep", "remesh"})
         unknown = set(step) - allowed
         if unknown:
             raise ValueError("edit %d (%s): unknown argument(s) %s" % (number + 1, op, sorted(unknown)))

@@ -98,6 +98,27 @@ class Sculptor:
         self._snapshot = None
 
 
+def sculpt(layer, strokes):
+    """Sculpts a feature layer's idealized mesh with `strokes` (dicts with the arguments of
+    Sculptor.stroke: brush, points, directions, radius, strength, spacing), then re-idealizes what
+    they changed (:func:`idealize.reidealize`). Returns the new layer; the input is not modified.
+    This is the ``{"op": "sculpt", "strokes": [...]}`` edit of :func:`idealize.edit.apply`, as a
+    document stores it."""
+    from .reidealize import reidealize
+    layer = as_feature_layer(layer)
+    if not strokes:
+        raise ValueError("sculpting needs at least one stroke")
+    sculptor = Sculptor(layer)
+    for number, one in enumerate(strokes):
+        one = dict(one)
+        unknown = set(one) - {"brush", "points", "directions", "radius", "strength", "spacing"}
+        if unknown or "brush" not in one or "points" not in one:
+            raise ValueError("stroke %d: needs brush and points, takes directions, radius, strength and spacing "
+                             "(unknown: %s)" % (number + 1, sorted(unknown)))
+        sculptor.stroke(one.pop("brush"), one.pop("points"), one.pop("directions", None), **one)
+    return reidealize(layer, sculptor.mesh(), sculptor.modified())
+
+
 def stroke(layer_or_mesh, brush, points, directions=None, radius=1.0, strength=0.5, spacing=0.2):
     """One stroke of `brush` on a feature layer's idealized mesh or on a mesh (see Sculptor.stroke).
     Returns (the new idealize.Mesh, modified: per face of it, whether the stroke changed it)."""
@@ -106,4 +127,4 @@ def stroke(layer_or_mesh, brush, points, directions=None, radius=1.0, strength=0
     return sculptor.mesh(), sculptor.modified()
 
 
-__all__ = ["BRUSHES", "Sculptor", "stroke"]
+__all__ = ["BRUSHES", "Sculptor", "sculpt", "stroke"]

@@ -243,3 +243,15 @@ def test_a_mesh_sculpted_elsewhere_and_read_back_keeps_the_unchanged_features(bo
     for old, new in zip(box_layer.features, back.features):
         assert new["params"] == old["params"]
     assert idealize.make_solid(back).solid
+
+
+def test_a_sculpt_edit_replays_the_same_layer(box_layer):
+    from idealize import edit
+    step = {"op": "sculpt", "strokes": [{"brush": "draw", "points": [[25, 20, 20], [35, 20, 20]],
+                                         "directions": [[0, 0, -1]] * 2, "radius": 6.0, "strength": 1.0}]}
+    first, again = edit.apply(box_layer, [step]), edit.apply(box_layer, [step])
+    assert np.array_equal(first.idealized_vertices, again.idealized_vertices)
+    assert np.array_equal(first.labels, again.labels) and first.features == again.features
+    assert len(first.features) > len(box_layer.features)
+    with pytest.raises(ValueError, match="needs brush and points"):
+        edit.apply(box_layer, [{"op": "sculpt", "strokes": [{"brush": "draw", "size": 2}]}])
