@@ -19,7 +19,7 @@ class IdealizeWorkbench(FreeCADGui.Workbench):
         import idealize.gui.commands  # noqa: F401  (registers the commands)
         commands = ["Idealize_Segment", "Idealize_SegmentIdealize", "Idealize_DeviationMap", "Idealize_MakeSolid",
                     "Idealize_ExportStep", "Idealize_PushPull", "Idealize_DeleteFeature", "Idealize_MoveFeature",
-                    "Idealize_CopyFeature"]
+                    "Idealize_CopyFeature", "Idealize_Sculpt"]
         self.appendToolbar("Idealize", commands)
         self.appendMenu("&Idealize", commands)
 

@@ -332,6 +332,34 @@ class CopyFeatureCommand(_FeatureGroupCommand):
                "face it sits on, turned if asked; a B-rep solid made from it is regenerated")
 
 
+class SculptCommand:
+    def GetResources(self):
+        return {"Pixmap": icon("Idealize_Sculpt"), "MenuText": "Sculpt",
+                "ToolTip": "Sculpt the selected feature layer like clay: drag on it with a brush (draw, inflate, "
+                           "flatten, smooth, pinch, crease, grab); the sculpted region is re-idealized into "
+                           "features and a B-rep solid made from it is regenerated; each stroke is one undo step"}
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and FreeCADGui.Control.activeDialog() is False \
+            and self._layer() is not None
+
+    @staticmethod
+    def _layer():
+        selected = _selected_layer_feature()
+        return selected[0] if selected is not None else _selected_layer()
+
+    def Activated(self):
+        from .task_sculpt import SculptPanel
+        obj = self._layer()
+        try:
+            panel = SculptPanel(obj)
+        except Exception as error:
+            report_error("Sculpt", error)
+            return
+        FreeCADGui.Selection.clearSelection()
+        FreeCADGui.Control.showDialog(panel)
+
+
 def _selected_shapes():
     return [o for o in FreeCADGui.Selection.getSelection() if o.isDerivedFrom("Part::Feature")]
 
@@ -369,3 +397,4 @@ FreeCADGui.addCommand("Idealize_PushPull", PushPullCommand())
 FreeCADGui.addCommand("Idealize_DeleteFeature", DeleteFeatureCommand())
 FreeCADGui.addCommand("Idealize_MoveFeature", MoveFeatureCommand())
 FreeCADGui.addCommand("Idealize_CopyFeature", CopyFeatureCommand())
+FreeCADGui.addCommand("Idealize_Sculpt", SculptCommand())

@@ -1,0 +1,204 @@
+"""Sculpt mode (Resources/ui/Sculpt.ui; issue 53): drags with the left mouse button on a feature
+layer in the 3D view apply the chosen brush (idealize.sculpt) along the stroke, seen from the view's
+direction; a circle under the pointer shows the brush. Each stroke is one undo step: the layer's
+sculpt edit, re-idealized (idealize.reidealize), and the solids made from its source regenerated.
+With re-idealization after each stroke turned off, the strokes are previewed and applied together,
+as one step, when the panel closes. Close or Esc leaves the mode.
+"""
+import math
+import os
+
+import FreeCADGui
+import numpy as np
+
+from .. import sculpt
+from ..freecad import layer_object
+from .task_push_pull import Preview, apply_in_one_step
+
+UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                       "Resources", "ui", "Sculpt.ui")
+CIRCLE_SEGMENTS = 48  # the brush circle's polygon: smooth at any size on screen
+
+#: The panel open now (None when none is): for macros and tests.
+active_panel = None
+
+
+def default_radius(layer):
+    """Four times the layer's median edge length: a brush a few triangles wide."""
+    V, F = layer.idealized_vertices, layer.mesh.faces
+    lengths = np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1)
+    return float(4.0 * np.median(lengths)) if len(lengths) else 1.0
+
+
+class BrushCircle:
+    """The brush's outline: a circle of the radius at the picked point, across the view direction."""
+
+    def __init__(self, view):
+        from pivy import coin
+        self.view = view
+        self.node = coin.SoSeparator()
+        self.transform = coin.SoTransform()
+        color = coin.SoBaseColor()
+        color.rgb.setValue(1.0, 0.55, 0.0)
+        style = coin.SoDrawStyle()
+        style.lineWidth = 2
+        points = coin.SoCoordinate3()
+        angles = np.linspace(0.0, 2.0 * math.pi, CIRCLE_SEGMENTS + 1)
+        points.point.setValues(0, len(angles), [[math.cos(a), math.sin(a), 0.0] for a in angles])
+        lines = coin.SoLineSet()
+        lines.numVertices.setValue(len(angles))
+        for child in (self.transform, color, style, points, lines):
+            self.node.addChild(child)
+        self.shown = False
+
+    def show(self, point, direction, radius):
+        from pivy import coin
+        self.transform.translation.setValue(*[float(x) for x in point])
+        self.transform.rotation.setValue(coin.SbRotation(coin.SbVec3f(0, 0, 1), coin.SbVec3f(*[float(-x) for x in direction])))
+        self.transform.scaleFactor.setValue(radius, radius, radius)
+        if not self.shown:
+            self.view.getSceneGraph().addChild(self.node)
+            self.shown = True
+
+    def hide(self):
+        if self.shown:
+            self.view.getSceneGraph().removeChild(self.node)
+            self.shown = False
+
+
+def ReleaseFilter(ended):
+    """A Qt event filter that calls ended() on a left-button release (and lets the event through)."""
+    from PySide import QtCore
+
+    class Filter(QtCore.QObject):
+        def eventFilter(self, watched, event):
+            if event.type() == QtCore.QEvent.MouseButtonRelease and event.button() == QtCore.Qt.LeftButton:
+                QtCore.QTimer.singleShot(0, ended)  # after the view has seen the release
+            return False
+
+    return Filter()
+
+
+class SculptPanel:
+    def __init__(self, obj):
+        global active_panel
+        from pivy import coin
+        self.obj = obj
+        self.layer = layer_object.feature_layer(obj)
+        self.form = FreeCADGui.PySideUic.loadUi(UI_FILE)
+        for brush in sculpt.BRUSHES:
+            self.form.brush.addItem(brush.capitalize(), brush)
+        self.form.radius.setValue(default_radius(self.layer))
+        self.view = FreeCADGui.getDocument(obj.Document.Name).ActiveView
+        self.circle = BrushCircle(self.view)
+        self.preview = Preview(obj)
+        self.pending = []     # strokes kept for one re-idealization when the panel closes
+        self.stroke = None    # (points, directions) of the drag under way
+        self.strokes_applied = 0
+        self.callbacks = [
+            (coin.SoMouseButtonEvent.getClassTypeId(), self.view.addEventCallbackPivy(
+                coin.SoMouseButtonEvent.getClassTypeId(), self.on_button)),
+            (coin.SoLocation2Event.getClassTypeId(), self.view.addEventCallbackPivy(
+                coin.SoLocation2Event.getClassTypeId(), self.on_move)),
+        ]
+        # The button's release reaches the view's navigation first, which takes it: the stroke ends
+        # on the widget's own release event instead.
+        self.viewport = self.view.graphicsView().viewport()
+        self.release_filter = ReleaseFilter(self.end_stroke)
+        self.viewport.installEventFilter(self.release_filter)
+        active_panel = self
+
+    def getStandardButtons(self):
+        from PySide import QtGui
+        return int(QtGui.QDialogButtonBox.Close)
+
+    # The view's events.
+    def pick(self, position):
+        """The point of the layer under the screen position, or None."""
+        info = self.view.getObjectInfo((int(position[0]), int(position[1])))
+        if not info or info.get("Object") != self.obj.Name:
+            return None
+        return np.array([info["x"], info["y"], info["z"]], dtype=float)
+
+    def direction(self):
+        d = self.view.getViewDirection()
+        return np.array([d.x, d.y, d.z], dtype=float)
+
+    def on_move(self, callback):
+        event = callback.getEvent()
+        point = self.pick(event.getPosition().getValue())
+        if point is None:
+            self.circle.hide()
+            return
+        self.circle.show(point, self.direction(), self.form.radius.value())
+        if self.stroke is not None:
+            self.stroke[0].append(point.tolist())
+            self.stroke[1].append(self.direction().tolist())
+            callback.setHandled()
+
+    def on_button(self, callback):
+        from pivy import coin
+        event = callback.getEvent()
+        if event.getButton() != coin.SoMouseButtonEvent.BUTTON1:
+            return
+        if event.getState() == coin.SoButtonEvent.DOWN:
+            point = self.pick(event.getPosition().getValue())
+            if point is None:
+                return  # off the mesh: the view turns as usual
+            self.stroke = ([point.tolist()], [self.direction().tolist()])
+            callback.setHandled()
+        elif self.stroke is not None:
+            callback.setHandled()
+            self.end_stroke()
+
+    def end_stroke(self):
+        if self.stroke is None:
+            return
+        points, directions = self.stroke
+        self.stroke = None
+        self.finish(points, directions)
+
+    # Strokes.
+    def stroke_step(self, points, directions):
+        return {"brush": self.form.brush.currentData(), "points": points, "directions": directions,
+                "radius": float(self.form.radius.value()), "strength": float(self.form.strength.value())}
+
+    def finish(self, points, directions):
+        one = self.stroke_step(points, directions)
+        if not self.form.reidealize.isChecked():
+            self.pending.append(one)
+            try:
+                self.preview.show(sculpt.sculpt(self.layer, self.pending))
+                self.form.status.setText("%d strokes waiting: re-idealized when the panel closes." % len(self.pending))
+            except Exception as error:  # a stroke that fails is dropped, and said so
+                self.pending.pop()
+                self.form.status.setText("Cannot apply: %s" % error)
+            return
+        done = apply_in_one_step(self.obj, {"op": "sculpt", "strokes": [one]}, "Sculpt stroke")
+        if done is not None:
+            self.layer = done[0]
+            self.strokes_applied += 1
+            new = sum(1 for f in self.layer.features if f["triangles"])
+            self.form.status.setText("%d strokes; the layer has %d features." % (self.strokes_applied, new))
+
+    # Leaving.
+    def close(self):
+        global active_panel
+        for kind, callback in self.callbacks:
+            self.view.removeEventCallbackPivy(kind, callback)
+        self.callbacks = []
+        self.viewport.removeEventFilter(self.release_filter)
+        self.circle.hide()
+        self.preview.hide()
+        if self.pending:
+            apply_in_one_step(self.obj, {"op": "sculpt", "strokes": self.pending}, "Sculpt")
+            self.pending = []
+        active_panel = None
+        FreeCADGui.Control.closeDialog()
+        return True
+
+    def accept(self):
+        return self.close()
+
+    def reject(self):
+        return self.close()

@@ -1,0 +1,120 @@
+"""GUI test of sculpt mode (issue 53) in the real FreeCAD window under xvfb-run: a block is
+idealized; Sculpt opens its panel; a drag across the top face, made of synthetic mouse events on the
+3D view, raises a bump there with the draw brush in one undo step; the layer is re-idealized (new
+features, the old ones unchanged) and its mesh changed; undo restores both, and Close leaves the
+mode.
+"""
+import json
+
+import pytest
+
+import test_gui as gui
+
+DRIVER = gui.HELPERS + r'''
+
+
+def mesh_state(layer):
+    table = json.loads(layer.FeatureTable)
+    points = layer.Mesh.Topology[0]
+    return {"features": len([f for f in table["features"] if f.get("triangles", 1)]),
+            "all_features": len(table["features"]),
+            "params": [f["params"] for f in table["features"]][:6],
+            "facets": layer.Mesh.CountFacets, "top": max(p.z for p in points)}
+
+
+def run():
+    if not start_session():
+        return
+    from PySide import QtCore, QtGui
+    import MeshPart, Part
+
+    doc = App.newDocument("Sculpt")
+    source = doc.addObject("Mesh::Feature", "Block")
+    source.Mesh = MeshPart.meshFromShape(Shape=Part.makeBox(60, 40, 20), MaxLength=2.0)
+    doc.recompute()
+    layer = run_on(doc, source, "Idealize_SegmentIdealize")[0]
+    result["before"] = mesh_state(layer)
+    view = Gui.ActiveDocument.ActiveView
+    view.viewTop()
+    view.fitAll()
+    wait(0.5)
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(doc.Name, layer.Name)
+    Gui.runCommand("Idealize_Sculpt")
+    wait(0.5)
+    from idealize.gui import task_sculpt
+    panel = task_sculpt.active_panel
+    result["panel_found"] = panel is not None
+    if panel is None:
+        return
+    form = panel.form
+    form.brush.setCurrentIndex(form.brush.findData("draw"))
+    form.radius.setValue(6.0)
+    form.strength.setValue(1.0)
+    undo_before = len(doc.UndoNames)
+
+    # A drag from (22, 20) to (38, 20) on the top face, as the mouse would make it.
+    widget = view.graphicsView().viewport()
+    def screen(x, y):
+        sx, sy = view.getPointOnScreen(App.Vector(x, y, 20))
+        return QtCore.QPoint(int(sx), int(widget.height() - sy))
+    def send(kind, point, buttons):
+        event = QtGui.QMouseEvent(kind, point, widget.mapToGlobal(point), QtCore.Qt.LeftButton
+                                  if kind != QtCore.QEvent.MouseMove else QtCore.Qt.NoButton,
+                                  buttons, QtCore.Qt.NoModifier)
+        QtGui.QApplication.sendEvent(widget, event)
+        QtGui.QApplication.processEvents()
+    path = [screen(22 + 16 * t / 10, 20) for t in range(11)]
+    send(QtCore.QEvent.MouseMove, path[0], QtCore.Qt.NoButton)
+    result["circle_shown"] = panel.circle.shown
+    send(QtCore.QEvent.MouseButtonPress, path[0], QtCore.Qt.LeftButton)
+    result["stroke_started"] = panel.stroke is not None
+    for point in path[1:]:
+        send(QtCore.QEvent.MouseMove, point, QtCore.Qt.LeftButton)
+    result["points"] = len(panel.stroke[0]) if panel.stroke else 0
+    send(QtCore.QEvent.MouseButtonRelease, path[-1], QtCore.Qt.NoButton)
+    wait(1.0)
+    result["sculpted"] = mesh_state(layer)
+    result["sculpted"].update({"undo_steps": len(doc.UndoNames) - undo_before,
+                               "undo_name": doc.UndoNames[0] if doc.UndoNames else None,
+                               "status": form.status.text(), "edits": len(json.loads(layer.Edits or "[]"))})
+    close = [b for b in Gui.getMainWindow().findChildren(QtGui.QPushButton) if b.text().replace("&", "") == "Close"
+             and b.isVisible()]
+    result["close_buttons"] = len(close)
+    close[0].click()  # leaves sculpt mode
+    wait(0.5)
+    result["closed"] = task_sculpt.active_panel is None and not Gui.Control.activeDialog()
+    doc.undo()
+    doc.recompute()
+    result["undone"] = mesh_state(layer)
+    doc.redo()
+    doc.recompute()
+    result["redone"] = mesh_state(layer)
+'''
+
+
+@pytest.fixture(scope="module")
+def sculpt_run(tmp_path_factory):
+    result = gui.run_gui(DRIVER, {}, tmp_path_factory.mktemp("sculpt"), timeout=300)
+    print(json.dumps(result, indent=1))
+    assert "exception" not in result, result["exception"]
+    assert not result["error_boxes"], result["error_boxes"]
+    return result
+
+
+def test_a_drag_on_the_view_sculpts_the_layer_in_one_undo_step(sculpt_run):
+    assert sculpt_run["panel_found"] and sculpt_run["circle_shown"] and sculpt_run["stroke_started"]
+    assert sculpt_run["points"] == 11  # every move of the drag picked a point of the mesh
+    before, sculpted = sculpt_run["before"], sculpt_run["sculpted"]
+    assert sculpted["top"] > before["top"] + 0.5  # a bump on the top face
+    assert sculpted["all_features"] > before["all_features"]  # the bump's features, after the old ones
+    assert sculpted["params"] == before["params"]  # the old features unchanged
+    assert sculpted["undo_steps"] == 1 and sculpted["undo_name"] == "Sculpt stroke" and sculpted["edits"] == 1
+
+
+def test_undo_restores_the_mesh_and_the_layer_and_close_leaves(sculpt_run):
+    before, undone, redone, sculpted = (sculpt_run[k] for k in ("before", "undone", "redone", "sculpted"))
+    assert sculpt_run["closed"]
+    assert undone["facets"] == before["facets"] and undone["top"] == pytest.approx(before["top"])
+    assert undone["all_features"] == before["all_features"]
+    assert redone["facets"] == sculpted["facets"] and redone["top"] == pytest.approx(sculpted["top"])
