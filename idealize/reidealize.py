@@ -72,14 +72,20 @@ def _same_surface(feature, found, points, tolerance):
     return float(distance.max()) <= tolerance
 
 
-def reidealize(layer, mesh, modified=None, rings=RINGS):
+def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
     """A new feature layer for `mesh` (an :class:`idealize.Mesh`, the layer's idealized mesh
     sculpted), re-idealizing only the faces flagged in `modified` (per face of `mesh`; None: the
-    faces that are not the layer's triangles) and `rings` rings around them. The input layer is not
-    modified."""
+    faces that are not the layer's triangles) and `rings` rings around them. `labels` (per face,
+    optional): the layer's feature of each face that was not modified, as a Sculptor carries them
+    (saves finding the layer's triangles in the mesh). The input layer is not modified."""
     layer = as_feature_layer(layer)
     V, F = mesh.vertices, mesh.faces
-    carried = _carried(layer, mesh)
+    if labels is not None and modified is not None:
+        carried = np.asarray(labels, dtype=np.int64)
+        if carried.shape != (len(F),):
+            raise ValueError("one label per face of the mesh (%d faces, %d labels)" % (len(F), len(carried)))
+    else:
+        carried = _carried(layer, mesh)
     changed = carried < 0
     if modified is not None:
         modified = np.asarray(modified, dtype=bool)
@@ -135,7 +141,9 @@ def _assemble(layer, mesh, labels, changed, features, relations, adjacency_befor
     idealized = V.copy()
     deviation = np.full(len(V), np.nan)
     # How many features each vertex's faces have, and whether a changed face has it.
-    pairs = np.unique(np.stack([F.ravel(), np.repeat(labels, 3)], axis=1), axis=0)
+    width = len(features) + 1  # (vertex, label) pairs as one key each: a 1-d unique is fast
+    keys = np.unique(F.ravel().astype(np.int64) * width + (np.repeat(labels, 3) + 1))
+    pairs = np.stack([keys // width, keys % width - 1], axis=1)
     pairs = pairs[pairs[:, 1] >= 0]
     on_features = np.bincount(pairs[:, 0], minlength=len(V))
     in_changed = np.zeros(len(V), dtype=bool)
@@ -151,11 +159,12 @@ def _assemble(layer, mesh, labels, changed, features, relations, adjacency_befor
         idealized[vertices[move]] = closest[move]
         deviation[vertices[move]] = 0.0
     # The graph from the faces now: the layer's edges where they remain, the region's new ones.
-    edges = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    edges = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1).astype(np.int64)
+    edge_keys = edges[:, 0] * len(V) + edges[:, 1]
     owner = np.tile(labels, 3)
-    order = np.lexsort((edges[:, 1], edges[:, 0]))
-    edges, owner = edges[order], owner[order]
-    same = np.all(edges[1:] == edges[:-1], axis=1)
+    order = np.argsort(edge_keys, kind="stable")
+    edge_keys, owner = edge_keys[order], owner[order]
+    same = edge_keys[1:] == edge_keys[:-1]
     pairs = set()
     for a, b in zip(owner[:-1][same].tolist(), owner[1:][same].tolist()):
         if a != b and a >= 0 and b >= 0:

@@ -116,7 +116,7 @@ def sculpt(layer, strokes):
             raise ValueError("stroke %d: needs brush and points, takes directions, radius, strength and spacing "
                              "(unknown: %s)" % (number + 1, sorted(unknown)))
         sculptor.stroke(one.pop("brush"), one.pop("points"), one.pop("directions", None), **one)
-    return reidealize(layer, sculptor.mesh(), sculptor.modified())
+    return reidealize(layer, sculptor.mesh(), sculptor.modified(), labels=sculptor.labels())
 
 
 def stroke(layer_or_mesh, brush, points, directions=None, radius=1.0, strength=0.5, spacing=0.2):
