@@ -104,19 +104,9 @@ std::vector<Eigen::Vector3d> dab_targets(const SculptMesh& mesh, Brush brush, co
         q = p - share * n.dot(p - region.centroid) * n;
         break;
       }
-      case Brush::Smooth: {
-        Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-        int count = 0;
-        const int start = mesh.halfedge(v);
-        int h = start;
-        do {
-          centroid += mesh.position(mesh.to(h));
-          ++count;
-          h = mesh.rotated(h);
-        } while (h != start);
-        q = p + std::min(1.0, std::abs(strength) * w) * (centroid / count - p);
+      case Brush::Smooth:
+        q = p + std::min(1.0, std::abs(strength) * w) * (mesh.neighbour_centroid(v) - p);
         break;
-      }
       case Brush::Pinch:
       case Brush::Crease: {
         Eigen::Vector3d towards = c - p;

@@ -143,17 +143,8 @@ class RegionRemesher {
     std::vector<std::pair<int, Eigen::Vector3d>> moves;
     for (int v : vertices_) {
       if (!live(v) || m_.border_vertex(v)) continue;
-      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-      int count = 0;
-      const int start = m_.halfedge(v);
-      int h = start;
-      do {
-        centroid += m_.position(m_.to(h));
-        ++count;
-        h = m_.rotated(h);
-      } while (h != start);
       const Eigen::Vector3d n = m_.vertex_normal(v);
-      Eigen::Vector3d u = centroid / count - m_.position(v);
+      Eigen::Vector3d u = m_.neighbour_centroid(v) - m_.position(v);
       u -= n.dot(u) * n;
       const Eigen::Vector3d target = m_.position(v) + u;
       if (keeps_orientation(v, -1, target)) moves.emplace_back(v, target);

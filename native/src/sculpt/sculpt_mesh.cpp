@@ -142,6 +142,18 @@ Eigen::Vector3d SculptMesh::vertex_normal(int v) const {
   return length > 0.0 ? Eigen::Vector3d(n / length) : n;
 }
 
+Eigen::Vector3d SculptMesh::neighbour_centroid(int v) const {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int count = 0, h = vertex_halfedge_[v];
+  if (h < 0) return position_[v];
+  do {
+    sum += position_[to_[h]];
+    ++count;
+    h = rotated(h);
+  } while (h != vertex_halfedge_[v]);
+  return sum / count;
+}
+
 void SculptMesh::border_outgoing(int v) {
   int h = vertex_halfedge_[v];
   if (h < 0) return;

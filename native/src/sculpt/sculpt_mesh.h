@@ -62,6 +62,7 @@ class SculptMesh {
   int find_halfedge(int a, int b) const;
   Eigen::Vector3d face_normal(int f) const;    // unit
   Eigen::Vector3d vertex_normal(int v) const;  // unit, area-weighted
+  Eigen::Vector3d neighbour_centroid(int v) const;  // the mean of v's neighbours (v itself if none)
 
   // Splits the edge of h at p: the new vertex, joined to the opposite corners (two faces become
   // four, one becomes two on the border). Returns the new vertex.
