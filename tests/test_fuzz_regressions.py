@@ -64,7 +64,10 @@ def regression_inputs():
 
 
 def seed_inputs():
-    return sorted(glob.glob(os.path.join(FUZZ, "corpus", "*", "*")))
+    # fuzz_sculpt's seeds are byte layouts of strokes on a generated sphere, not meshes: tools/fuzz.sh
+    # (and so tools/test.sh) runs every one of them first, the inputs that once crashed among them.
+    return sorted(p for p in glob.glob(os.path.join(FUZZ, "corpus", "*", "*"))
+                  if os.path.basename(os.path.dirname(p)) != "fuzz_sculpt")
 
 
 def check_no_crash(path):

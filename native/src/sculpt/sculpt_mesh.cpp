@@ -235,6 +235,11 @@ bool SculptMesh::collapse_ok(int h) const {
     if (face_[o1 ^ 1] < 0 && face_[o2 ^ 1] < 0) return false;
   }
   if (vl == vr) return false;
+  // The opposite corners lose an edge each: one left with two (three on the border, where the
+  // valence counts the border's edges) would hold two faces on the same three vertices, as on a
+  // tetrahedron, which pmp-library's test lets through.
+  for (int corner : {vl, vr})
+    if (corner >= 0 && valence(corner) < (border_vertex(corner) ? 3 : 4)) return false;
   // An edge between two border vertices must be a border edge.
   if (border_vertex(v0) && border_vertex(v1) && face_[h] >= 0 && face_[o] >= 0) return false;
   // The link condition: v0's and v1's neighbours share only vl and vr.
