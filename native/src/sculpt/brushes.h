@@ -9,7 +9,8 @@
 // Per dab, with s the strength and D the dab spacing:
 //   draw:    along the region's area-weighted normal, by s w D (a negative s digs);
 //   inflate: along each vertex's own normal, by s w D;
-//   flatten: towards the plane through the region's centroid, across the area normal, by a share
+//   flatten: towards the area's plane (across the mean normal, through the mean of the vertices
+//            weighted towards the rim: the surface around what is flattened), by a share
 //            s w D / radius of the distance (at most all of it);
 //   smooth:  towards the centroid of its neighbours, by a share s w (at most all of it);
 //   pinch:   towards c in the tangent plane, by a share s w D / radius;
