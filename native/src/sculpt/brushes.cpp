@@ -13,6 +13,12 @@ namespace idealize {
 
 namespace {
 
+// The finest target edge length, as a share of the brush's radius: a dab's disc then holds at most
+// about pi 32^2 / (sqrt(3) / 4) = 7,400 triangles, more than the 5,000 a stroke of the issue's
+// budget changes. Finer targets (the edges a previous stroke left tiny under a wide brush) refined
+// without bound: the fuzzer's stroke over a whole sphere grew past 2 GB.
+constexpr double kFinestShare = 1.0 / 32.0;
+
 double falloff(double distance, double radius) {
   const double t = distance / radius;
   if (t >= 1.0) return 0.0;
@@ -204,8 +210,9 @@ StrokeReport sculpt_stroke(SculptMesh& mesh, Brush brush, const MatrixX3d& point
   std::vector<int> stamp(mesh.vertex_slots(), -1);
   int mark = 0;
   const Region first = gather(mesh, dabs[0].first, dabs[0].second, options.radius, stamp, mark++);
-  report.target_edge_length =
-      options.target_edge_length > 0.0 ? options.target_edge_length : median_edge_length(mesh, first.vertices);
+  report.target_edge_length = std::max(
+      options.target_edge_length > 0.0 ? options.target_edge_length : median_edge_length(mesh, first.vertices),
+      kFinestShare * options.radius);
   DynamicTopologyOptions topology;
   topology.target_edge_length = report.target_edge_length;
   std::vector<char> active(mesh.vertex_slots(), 0);

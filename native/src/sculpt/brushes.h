@@ -40,7 +40,8 @@ struct StrokeOptions {
   // diameter, 1/5 of its radius.
   double spacing = 0.2;
   // The edge length dynamic topology keeps; 0: the median length of the edges under the first dab
-  // before the stroke (the region's own resolution).
+  // before the stroke (the region's own resolution). Never finer than 1/32 of the radius (a dab's
+  // disc then holds at most about 7,400 triangles; see brushes.cpp).
   double target_edge_length = 0.0;
   bool dynamic_topology = true;
 };
