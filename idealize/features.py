@@ -100,7 +100,7 @@ DEFAULTS = native.feature_defaults()
 
 def idealize(mesh, segmentation=None, progress=None, angle_tolerance=DEFAULTS["angle_tolerance_degrees"],
              distance_tolerance=None, radius_tolerance=DEFAULTS["radius_tolerance"],
-             idealize_relations=DEFAULTS["idealize"], self_intersections=False):
+             idealize_relations=DEFAULTS["idealize"], self_intersections=False, measured=False):
     """Segment (unless a segmentation is given), identify and relate features, project the mesh.
 
     The options rarely need changing. angle_tolerance (degrees): directions closer than this are
@@ -109,7 +109,9 @@ def idealize(mesh, segmentation=None, progress=None, angle_tolerance=DEFAULTS["a
     diagonal); radius_tolerance: radii within this fraction of each other are one design radius;
     idealize_relations: make the relations exact (False: the fitted surfaces stay as they are).
     self_intersections: have the segmentation's mesh check count crossing triangle pairs (see
-    :func:`idealize.segment`; the command line does).
+    :func:`idealize.segment`; the command line does). measured: the mesh is not an exact
+    tessellation even where most of it looks like one (a sculpted region with the CAD faces around
+    it, as :func:`idealize.reidealize` passes it).
 
     progress: an :class:`idealize.Progress` that another thread may read and cancel. Its
     ``fraction`` goes once from the start to the end of its ``range`` (0 to 1 unless set) over the
@@ -124,7 +126,8 @@ def idealize(mesh, segmentation=None, progress=None, angle_tolerance=DEFAULTS["a
     if not 0 <= radius_tolerance < 1:
         raise ValueError("the radius tolerance is a fraction between 0 and 1, got %r" % radius_tolerance)
     options = {"angle_tolerance_degrees": float(angle_tolerance), "distance_tolerance": float(distance_tolerance or 0.0),
-               "radius_tolerance": float(radius_tolerance), "idealize": bool(idealize_relations)}
+               "radius_tolerance": float(radius_tolerance), "idealize": bool(idealize_relations),
+               "measured": bool(measured)}
     if progress is None:
         return _idealize(mesh, segmentation, None, options, self_intersections)
     caller_range = progress.range

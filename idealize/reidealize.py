@@ -61,6 +61,162 @@ def _grow(faces, chosen, rings):
     return region
 
 
+def _face_neighbours(F):
+    """(#F, 3): the face across each edge of each face (edge k from corner k to k+1), -1 where the
+    edge has not exactly two faces."""
+    edges = np.sort(np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2), axis=1).astype(np.int64)
+    keys = edges[:, 0] * (int(F.max()) + 1) + edges[:, 1]
+    order = np.argsort(keys, kind="stable")
+    _, start, counts = np.unique(keys[order], return_index=True, return_counts=True)
+    pairs = start[counts == 2]
+    a, b = order[pairs], order[pairs + 1]
+    neighbour = np.full(len(keys), -1, dtype=np.int64)
+    neighbour[a], neighbour[b] = b // 3, a // 3
+    return neighbour.reshape(-1, 3)
+
+
+def _absorb(layer, V, F, labels, changed):
+    """Changed faces that lie on a kept neighbour's surface join that feature: grown from the faces
+    the sculpting left, a changed face joins a feature of a face across one of its edges when its
+    three corners and its centre are within the layer's distance tolerance of that feature's surface.
+    A bump flattened back into its face becomes that face; the flat ends of a sculpted region stay
+    with the faces they continue. Returns the faces absorbed (per face) and updates `labels`."""
+    neighbours = _face_neighbours(F)
+    tolerance = layer.distance_tolerance
+    assigned = labels >= 0
+    absorbed = np.zeros(len(F), dtype=bool)
+    rejected = set()  # (face, feature) pairs already found off the surface
+    while True:
+        across = neighbours[changed & ~absorbed]
+        faces = np.flatnonzero(changed & ~absorbed)
+        candidates = {}
+        for k in range(3):
+            other = across[:, k]
+            ok = other >= 0
+            ok[ok] = assigned[other[ok]]
+            for f, l in zip(faces[ok].tolist(), labels[other[ok]].tolist()):
+                if (f, l) not in rejected and layer.features[l]["type"] != "freeform":
+                    candidates.setdefault(l, set()).add(f)
+        if not candidates:
+            return absorbed
+        grew = False
+        for feature, members in sorted(candidates.items()):
+            members = np.array(sorted(members), dtype=np.int64)
+            members = members[~absorbed[members]]
+            if not len(members):
+                continue
+            corners = V[F[members]]
+            points = np.concatenate([corners.reshape(-1, 3), corners.mean(axis=1)])
+            f = layer.features[feature]
+            _, distance = native.onto_surface(f["type"], f["params"], np.ascontiguousarray(points, float))
+            near = np.concatenate([distance[:3 * len(members)].reshape(-1, 3), distance[3 * len(members):, None]],
+                                  axis=1).max(axis=1) <= tolerance
+            labels[members[near]] = feature
+            absorbed[members[near]] = assigned[members[near]] = True
+            rejected.update((int(m), feature) for m in members[~near])
+            grew |= bool(near.any())
+        if not grew:
+            return absorbed
+
+
+def _fillet(planes, points, tolerance, near=None):
+    """The cylinder tangent to both `planes` (feature dicts, not parallel) that most of `points` lie
+    on (thesis 4.3.3: two tangent planes fix a cylinder's axis and, for a radius, its centre).
+
+    Each point votes for the radii of the two such circles through it; the radius with most votes
+    within `tolerance` is refined by least squares over the points within `tolerance` of its
+    cylinder. A sculpted round has a constant section along most of its length and fades out at its
+    ends: the votes find the section, where a least-squares fit over all points would mix in the
+    ends. The centre is on the side of each plane where `near` (a point, default the points' mean)
+    lies. Returns (params, inliers per point) or None."""
+    from scipy.optimize import minimize_scalar
+    n = [np.asarray(p["params"]["normal"], float) for p in planes]
+    o = [np.asarray(p["params"]["point"], float) for p in planes]
+    axis = np.cross(n[0], n[1])
+    if np.linalg.norm(axis) < 1e-6:
+        return None
+    axis /= np.linalg.norm(axis)
+    near = points.mean(axis=0) if near is None else near
+    line = np.linalg.solve(np.array([n[0], n[1], axis]), np.array([n[0] @ o[0], n[1] @ o[1], axis @ near]))
+    sides = np.array([np.sign((near - o[k]) @ n[k]) or 1.0 for k in range(2)])
+    c12 = n[0] @ n[1]
+    a, b = np.linalg.solve(np.array([[1.0, c12], [c12, 1.0]]), sides)  # centre = line + r (a n0 + b n1)
+    offset = a * n[0] + b * n[1]
+    across = points - line
+    across -= np.outer(across @ axis, axis)
+
+    def distances(r):
+        return np.abs(np.linalg.norm(across - r * offset, axis=1) - r)
+
+    # |q - r o|^2 = r^2: (|o|^2 - 1) r^2 - 2 (q.o) r + |q|^2 = 0, two roots per point.
+    qa, qo, qq = offset @ offset - 1.0, across @ offset, np.einsum("ij,ij->i", across, across)
+    disc = np.sqrt(np.maximum(qo * qo - qa * qq, 0.0))
+    votes = np.concatenate([(qo - disc) / qa, (qo + disc) / qa]) if abs(qa) > 1e-9 else qq / (2 * qo)
+    votes = votes[np.isfinite(votes) & (votes > tolerance)]
+    if not len(votes):
+        return None
+    bins = np.arange(votes.min(), votes.max() + 2 * tolerance, tolerance)
+    counts, edges = np.histogram(votes, bins=bins)
+    k = int(np.argmax(counts))
+    start = 0.5 * (edges[k] + edges[k + 1])
+    inliers = distances(start) <= tolerance
+    if inliers.sum() < 3:
+        return None
+    r = float(minimize_scalar(lambda r: float(np.sum(distances(r)[inliers] ** 2)),
+                              bounds=(start - 2 * tolerance, start + 2 * tolerance), method="bounded").x)
+    centre = line + r * offset
+    inliers = distances(r) <= tolerance
+    return {"axis": axis.tolist(), "point": (centre + ((near - centre) @ axis) * axis).tolist(), "radius": r}, inliers
+
+
+def _semi_defined(layer, V, F, labels, features, count):
+    """Region features that meet two kept planes, a new cylinder along both (its axis parallel to
+    them within the layer's angle tolerance) or a freeform piece: a sculpted round edge. A cylinder
+    becomes the one tangent to both planes (:func:`_fillet`); of a freeform piece, the faces on such a
+    cylinder become a new cylinder feature. Returns the new tangent relations."""
+    neighbours = _face_neighbours(F)
+    sine = np.sin(np.radians(layer.angle_tolerance or 10.0))
+    tolerance = layer.distance_tolerance
+    relations = []
+    for f in list(features[count:]):
+        mine = labels == f["id"]
+        if f["type"] not in ("cylinder", "freeform") or not mine.any():
+            continue
+        across = neighbours[mine].ravel()
+        across = labels[across[across >= 0]]
+        kept, shared = np.unique(across[(across >= 0) & (across < count)], return_counts=True)
+        planes = [(c, k) for k, c in zip(kept.tolist(), shared.tolist()) if features[k]["type"] == "plane"]
+        if f["type"] == "cylinder":
+            axis = np.asarray(f["params"]["axis"], float)
+            planes = [(c, k) for c, k in planes if abs(np.asarray(features[k]["params"]["normal"], float) @ axis) <= sine]
+        if len(planes) < 2:
+            continue
+        chosen = [features[k] for _, k in sorted(planes, reverse=True)[:2]]
+        vertices = np.unique(F[mine])
+        near = np.asarray(f["params"]["point"], float) if f["type"] == "cylinder" else None
+        fitted = _fillet(chosen, V[vertices], tolerance, near)
+        if fitted is None:
+            continue
+        params, inliers = fitted
+        if f["type"] == "cylinder":
+            if np.asarray(params["axis"]) @ np.asarray(f["params"]["axis"]) < 0:
+                params.update(axis=(-np.asarray(params["axis"])).tolist())
+            f["params"] = params
+            target = f["id"]
+        else:
+            on = np.zeros(len(V), dtype=bool)
+            on[vertices[inliers]] = True
+            faces = np.flatnonzero(mine & on[F].all(axis=1))
+            # A piece of the round needs faces across it: at least as many as the planes' shared edges.
+            if len(faces) < max(3, min(c for c, _ in sorted(planes, reverse=True)[:2])):
+                continue
+            target = len(features)
+            features.append({"id": target, "type": "cylinder", "params": params})
+            labels[faces] = target
+        relations += [{"kind": "tangent", "features": sorted([target, p["id"]])} for p in chosen]
+    return relations
+
+
 def _same_surface(feature, found, points, tolerance):
     """Whether the layer's `feature` has the surface of the region's feature `found` where it lies:
     the region feature's surface under its `points` (their nearest points on it) within
@@ -93,21 +249,22 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
             raise ValueError("one modified flag per face of the mesh (%d faces, %d flags)" % (len(F), len(modified)))
         changed |= modified
     labels = np.where(changed, -1, carried)
+    rest = changed & ~_absorb(layer, V, F, labels, changed)
     count = len(layer.features)
     features = [dict(f) for f in layer.features]
     relations = [dict(r) for r in layer.relations]
     adjacency_before = {(min(a["a"], a["b"]), max(a["a"], a["b"])): a for a in layer.adjacency}
     sub_adjacency = {}
-    if changed.any():
-        region = _grow(F, changed, rings)
+    if rest.any():
+        region = _grow(F, rest, rings)
         used = np.unique(F[region])
         index = np.full(len(V), -1, dtype=np.int64)
         index[used] = np.arange(len(used))
         sub = idealize(Mesh(V[used], index[F[region]]), distance_tolerance=layer.distance_tolerance,
-                       angle_tolerance=layer.angle_tolerance or 10.0)
+                       angle_tolerance=layer.angle_tolerance or 10.0, measured=True)
         sub_labels = np.asarray(sub.labels)
         region_faces = np.flatnonzero(region)
-        around = set(carried[region & ~changed].tolist()) - {-1}
+        around = set(labels[region & ~rest].tolist()) - {-1}
         mapping = {}
         for s in sub.features:
             mine = sub_labels == s["id"]
@@ -115,11 +272,11 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
             match = [f for f in sorted(around) if _same_surface(layer.features[f], s, points, layer.distance_tolerance)]
             if match:
                 mapping[s["id"]] = match[0]
-            elif np.any(changed[region_faces[mine]]):
+            elif np.any(rest[region_faces[mine]]):
                 mapping[s["id"]] = len(features)
                 features.append(dict(s, id=len(features)))
         for k, f in enumerate(region_faces):
-            if changed[f]:
+            if rest[f]:
                 labels[f] = mapping.get(int(sub_labels[k]), -1)
         for a in sub.adjacency:
             x, y = mapping.get(a["a"]), mapping.get(a["b"])
@@ -129,6 +286,7 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
             members = sorted({mapping[m] for m in r["features"] if m in mapping})
             if len(members) >= 2 and any(m >= count for m in members):
                 relations.append(dict(r, features=members))
+    relations += _semi_defined(layer, V, F, labels, features, count)
     return _assemble(layer, mesh, labels, changed, features, relations, adjacency_before, sub_adjacency)
 
 

@@ -255,3 +255,67 @@ def test_a_sculpt_edit_replays_the_same_layer(box_layer):
     assert len(first.features) > len(box_layer.features)
     with pytest.raises(ValueError, match="needs brush and points"):
         edit.apply(box_layer, [{"op": "sculpt", "strokes": [{"brush": "draw", "size": 2}]}])
+
+
+def test_an_edge_smoothed_round_becomes_a_cylinder_tangent_to_both_faces(box_layer):
+    """The thesis's semi-defined feature: the two kept planes fix the new cylinder's axis and centre
+    for a radius; the radius is the one most of the round's vertices lie on."""
+    sculptor = sculpt.Sculptor(box_layer)
+    d = np.array([0, 1, -1.0]) / np.sqrt(2)
+    for _ in range(10):
+        sculptor.stroke("smooth", [[6, 0, 20], [54, 0, 20]], [d, d], radius=4.0, strength=1.0)
+    mesh, modified = sculptor.mesh(), sculptor.modified()
+    layer = idealize.reidealize(box_layer, mesh, modified)
+    count = len(box_layer.features)
+    assert [f["params"] for f in layer.features[:count]] == [f["params"] for f in box_layer.features]
+    # The feature at the middle of the rounded edge.
+    middle = int(np.argmin(np.linalg.norm(mesh.vertices - [30.0, 0.0, 20.0], axis=1)))
+    face = int(np.flatnonzero((mesh.faces == middle).any(axis=1))[0])
+    round_ = layer.features[layer.labels[face]]
+    assert round_["id"] >= count and round_["type"] == "cylinder"
+    p = round_["params"]
+    assert abs(p["axis"][0]) == pytest.approx(1.0, abs=1e-9)
+    # Tangent to the top (z = 20) and the front (y = 0): the centre at the radius from both.
+    assert p["point"][1] == pytest.approx(p["radius"], abs=1e-6)
+    assert 20.0 - p["point"][2] == pytest.approx(p["radius"], abs=1e-6)
+    # The radius is the one most vertices of the round vote for: within the round's own extent.
+    on = np.unique(mesh.faces[np.asarray(layer.labels) == round_["id"]])
+    assert 0.5 * np.ptp(mesh.vertices[on][:, 1]) < p["radius"] < 4.0 * np.ptp(mesh.vertices[on][:, 1])
+    tangent = [r["features"] for r in layer.relations if r["kind"] == "tangent" and round_["id"] in r["features"]]
+    assert len(tangent) == 2 and all(max(pair) == round_["id"] for pair in tangent)
+    made = idealize.make_solid(layer)
+    assert made.solid
+
+
+def test_a_round_sculpted_towards_a_fillet_becomes_that_fillet(box_layer):
+    """Sculpted as a user would with the target shown (bench/sculpt_targets.py): the re-idealized
+    cylinder is the target fillet, radius and axis within 2 %."""
+    targets = shapes.bench_module("sculpt_targets")
+    radius = 4.0
+    sculptor = sculpt.Sculptor(box_layer)
+    target = targets.round_edge((60.0, 40.0, 20.0), radius)
+    _, largest, _ = targets.sculpt_towards(sculptor, target, [radius, 0.6 * radius, 0.35 * radius], 0.01 * radius, 300)
+    assert largest <= 0.05 * radius
+    mesh = sculptor.mesh()
+    layer = idealize.reidealize(box_layer, mesh, sculptor.modified())
+    middle = int(np.argmin(np.linalg.norm(mesh.vertices - [30.0, radius * (1 - 0.5 ** 0.5), 20 - radius * (1 - 0.5 ** 0.5)], axis=1)))
+    face = int(np.flatnonzero((mesh.faces == middle).any(axis=1))[0])
+    p = layer.features[layer.labels[face]]["params"]
+    assert layer.features[layer.labels[face]]["type"] == "cylinder"
+    assert p["radius"] == pytest.approx(radius, rel=0.02)
+    assert [p["point"][1], p["point"][2]] == pytest.approx([radius, 20.0 - radius], abs=0.02 * radius)
+
+
+def test_a_bump_flattened_away_is_absorbed_by_its_face(box_layer):
+    """Flattened faces within the tolerance of the top join it before anything is re-segmented."""
+    sculptor = sculpt.Sculptor(box_layer)
+    down = [[0, 0, -1.0]] * 2
+    for _ in range(2):
+        sculptor.stroke("draw", [[30, 20, 20]], down[:1], radius=5.0, strength=1.0)
+    for _ in range(12):
+        sculptor.stroke("flatten", [[20, 20, 20], [40, 20, 20]], down, radius=10.0, strength=1.0)
+    layer = idealize.reidealize(box_layer, sculptor.mesh(), sculptor.modified())
+    top = [f["id"] for f in box_layer.features if f["params"]["normal"][2] > 0.99][0]
+    assert all(f["triangles"] == 0 for f in layer.features[len(box_layer.features):])
+    assert set(np.asarray(layer.labels)[sculptor.modified()].tolist()) == {top}
+    assert idealize.make_solid(layer).solid

@@ -259,7 +259,7 @@ PYBIND11_MODULE(_native, m) {
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, std::vector<int> labels,
          const std::vector<double>& patch_mean, const std::vector<double>& patch_gaussian, double zero_low,
          double zero_high, Progress* progress, double angle_tolerance_degrees, double distance_tolerance,
-         double radius_tolerance, bool idealize) {
+         double radius_tolerance, bool idealize, bool measured) {
         const TriangleMesh mesh = make_mesh(V, F);
         if (patch_mean.size() != patch_gaussian.size())
           throw MeshError("one mean and one Gaussian curvature per patch are needed");
@@ -271,6 +271,7 @@ PYBIND11_MODULE(_native, m) {
         options.distance_tolerance = distance_tolerance;
         options.radius_tolerance = radius_tolerance;
         options.idealize = idealize;
+        options.measured = measured;
         FeatureLayer layer;
         {
           py::gil_scoped_release release;
@@ -283,6 +284,7 @@ PYBIND11_MODULE(_native, m) {
       py::arg("angle_tolerance_degrees") = FeatureOptions{}.angle_tolerance_degrees,
       py::arg("distance_tolerance") = FeatureOptions{}.distance_tolerance,
       py::arg("radius_tolerance") = FeatureOptions{}.radius_tolerance, py::arg("idealize") = FeatureOptions{}.idealize,
+      py::arg("measured") = FeatureOptions{}.measured,
       "Feature identification, graph and projection (thesis ch. 4); options as FeatureOptions "
       "(distance_tolerance 0: 0.1 % of the bounding-box diagonal).");
 

@@ -71,6 +71,10 @@ struct FeatureOptions {
   // Make the relations exact and snap axes to the part's ideal directions (idealization.h) before
   // the mesh is projected.
   bool idealize = true;
+  // The mesh is known not to be an exact tessellation, whatever most of its patches look like: a
+  // sculpted region re-idealized with the ring of CAD faces around it (reidealize), whose sculpted
+  // surfaces are smooth and finely meshed, not faceted.
+  bool measured = false;
   // Receives the progress (0..1 over the call) and is polled for cancellation (throws Cancelled).
   Progress* progress = nullptr;
 };

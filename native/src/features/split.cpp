@@ -591,7 +591,7 @@ bool decide_mesh_kind(FeatureState& s) {
   std::nth_element(normal_rms.begin(), normal_rms.begin() + middle, normal_rms.end());
   s.noise = rms[middle] + s.floor;
   s.normal_noise += normal_rms[middle];
-  if (s.noiseless) {
+  if (s.noiseless && !s.options.measured) {
     std::vector<double> farthest;
     const std::vector<double> farthest_vertex = farthest_vertices(s);
     for (size_t p = 0; p < s.layer.features.size(); ++p)
