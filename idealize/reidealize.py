@@ -32,6 +32,12 @@ from .mesh import Mesh
 # region feature the faces across its border, a second lets the segmentation see the curvature
 # there (its one-ring estimates reach one ring further).
 RINGS = 2
+# The fewest inner vertices a new feature is refitted to (_refit_inside): five times the four
+# parameters of a sphere, the most that refit finds, leave its fit determined with noise.
+MIN_REFIT_POINTS = 20
+# Gauss-Newton steps of a circle or sphere fit from the algebraic one, which on points of a sculpted
+# surface is within a few per cent: each step squares the relative error.
+GAUSS_NEWTON_STEPS = 6
 
 
 def _carried(layer, mesh):
@@ -75,48 +81,61 @@ def _face_neighbours(F):
     return neighbour.reshape(-1, 3)
 
 
-def _absorb(layer, V, F, labels, changed):
-    """Changed faces that lie on a kept neighbour's surface join that feature: grown from the faces
-    the sculpting left, a changed face joins a feature of a face across one of its edges when its
-    three corners and its centre are within the layer's distance tolerance of that feature's surface.
-    A bump flattened back into its face becomes that face; the flat ends of a sculpted region stay
-    with the faces they continue. Returns the faces absorbed (per face) and updates `labels`."""
-    neighbours = _face_neighbours(F)
-    tolerance = layer.distance_tolerance
-    assigned = labels >= 0
-    absorbed = np.zeros(len(F), dtype=bool)
-    rejected = set()  # (face, feature) pairs already found off the surface
+def _region_neighbours(F, changed):
+    """:func:`_face_neighbours` for the changed faces (their neighbours are in the one ring around
+    them, whose faces' own neighbours outside it are left -1): the edges of the whole mesh need not
+    be sorted for a local change."""
+    near = np.flatnonzero(_grow(F, changed, 1))
+    neighbours = np.full((len(F), 3), -1, dtype=np.int64)
+    if len(near):
+        local = _face_neighbours(F[near])
+        neighbours[near] = np.where(local >= 0, near[np.maximum(local, 0)], -1)
+    return neighbours
+
+
+def _absorb(features, growing, tolerance, V, F, labels, candidates, neighbours):
+    """Grows the features `growing` (ids into `features`) over the `candidates` faces (per face): a
+    candidate face joins a growing feature of a face across one of its edges when its three corners
+    and its centre are within `tolerance` of that feature's surface (where two such features meet,
+    the one of lower id first). `neighbours`: :func:`_face_neighbours` (at least for the candidate
+    faces). Returns the faces that joined (per face) and updates `labels`."""
+    faces = np.flatnonzero(candidates)
+    growing = sorted(growing)
+    corners = V[F[faces]]
+    points = np.ascontiguousarray(np.concatenate([corners.reshape(-1, 3), corners.mean(axis=1)]), float)
+    on = {}
+    for feature in growing:
+        f = features[feature]
+        _, distance = native.onto_surface(f["type"], f["params"], points)
+        on[feature] = np.concatenate([distance[:3 * len(faces)].reshape(-1, 3), distance[3 * len(faces):, None]],
+                                     axis=1).max(axis=1) <= tolerance
+    joined = np.zeros(len(F), dtype=bool)
+    local = np.zeros(len(faces), dtype=bool)  # joined, per candidate face
+    across = neighbours[faces]
     while True:
-        across = neighbours[changed & ~absorbed]
-        faces = np.flatnonzero(changed & ~absorbed)
-        candidates = {}
-        for k in range(3):
-            other = across[:, k]
-            ok = other >= 0
-            ok[ok] = assigned[other[ok]]
-            for f, l in zip(faces[ok].tolist(), labels[other[ok]].tolist()):
-                if (f, l) not in rejected and layer.features[l]["type"] != "freeform":
-                    candidates.setdefault(l, set()).add(f)
-        if not candidates:
-            return absorbed
+        across_labels = np.where(across >= 0, labels[np.maximum(across, 0)], -1)
         grew = False
-        for feature, members in sorted(candidates.items()):
-            members = np.array(sorted(members), dtype=np.int64)
-            members = members[~absorbed[members]]
-            if not len(members):
-                continue
-            corners = V[F[members]]
-            points = np.concatenate([corners.reshape(-1, 3), corners.mean(axis=1)])
-            f = layer.features[feature]
-            _, distance = native.onto_surface(f["type"], f["params"], np.ascontiguousarray(points, float))
-            near = np.concatenate([distance[:3 * len(members)].reshape(-1, 3), distance[3 * len(members):, None]],
-                                  axis=1).max(axis=1) <= tolerance
-            labels[members[near]] = feature
-            absorbed[members[near]] = assigned[members[near]] = True
-            rejected.update((int(m), feature) for m in members[~near])
-            grew |= bool(near.any())
+        for feature in growing:
+            joins = ~local & on[feature] & (across_labels == feature).any(axis=1)
+            if joins.any():
+                local |= joins
+                labels[faces[joins]] = feature
+                grew = True
         if not grew:
-            return absorbed
+            break
+    joined[faces[local]] = True
+    return joined
+
+
+def _absorb_into_kept(layer, V, F, labels, changed, neighbours):
+    """Changed faces that lie on a kept neighbour's surface join that feature (:func:`_absorb`, with
+    the layer's distance tolerance), grown from the faces the sculpting left. A bump flattened back
+    into its face becomes that face; the flat ends of a sculpted region stay with the faces they
+    continue. Returns the faces absorbed (per face) and updates `labels`."""
+    across = neighbours[changed]
+    seen = labels[across[across >= 0]]
+    kept = {int(l) for l in seen[seen >= 0]} - {i for i, f in enumerate(layer.features) if f["type"] == "freeform"}
+    return _absorb(layer.features, kept, layer.distance_tolerance, V, F, labels, changed, neighbours)
 
 
 def _fillet(planes, points, tolerance, near=None):
@@ -169,15 +188,14 @@ def _fillet(planes, points, tolerance, near=None):
     return {"axis": axis.tolist(), "point": (centre + ((near - centre) @ axis) * axis).tolist(), "radius": r}, inliers
 
 
-def _semi_defined(layer, V, F, labels, features, count):
+def _semi_defined(layer, V, F, labels, features, count, neighbours):
     """Region features that meet two kept planes, a new cylinder along both (its axis parallel to
     them within the layer's angle tolerance) or a freeform piece: a sculpted round edge. A cylinder
     becomes the one tangent to both planes (:func:`_fillet`); of a freeform piece, the faces on such a
     cylinder become a new cylinder feature. Returns the new tangent relations."""
-    neighbours = _face_neighbours(F)
     sine = np.sin(np.radians(layer.angle_tolerance or 10.0))
     tolerance = layer.distance_tolerance
-    relations = []
+    relations, rounds = [], []
     for f in list(features[count:]):
         mine = labels == f["id"]
         if f["type"] not in ("cylinder", "freeform") or not mine.any():
@@ -214,18 +232,158 @@ def _semi_defined(layer, V, F, labels, features, count):
             features.append({"id": target, "type": "cylinder", "params": params})
             labels[faces] = target
         relations += [{"kind": "tangent", "features": sorted([target, p["id"]])} for p in chosen]
+        rounds.append(target)
+    if rounds:
+        # Pieces of the round that the region's segmentation took for other new surfaces (a flat band
+        # where the sculpt is not quite round) join it where they lie on it.
+        _absorb(features, rounds, tolerance, V, F, labels, (labels >= count) & ~np.isin(labels, rounds), neighbours)
     return relations
 
 
-def _same_surface(feature, found, points, tolerance):
-    """Whether the layer's `feature` has the surface of the region's feature `found` where it lies:
-    the region feature's surface under its `points` (their nearest points on it) within
-    `tolerance` of the feature's surface, of the same type."""
+def _ball(points, weights):
+    """The weighted least-squares circle (n, 2 points) or sphere (n, 3) of the distances: the
+    algebraic fit (Kasa), then Gauss-Newton steps. (centre, radius)."""
+    w = np.sqrt(weights / weights.sum())
+    A = np.column_stack([2 * points, np.ones(len(points))]) * w[:, None]
+    solution, *_ = np.linalg.lstsq(A, (points ** 2).sum(axis=1) * w, rcond=None)
+    centre = solution[:-1]
+    radius = float(np.sqrt(max(solution[-1] + centre @ centre, 0.0)))
+    for _ in range(GAUSS_NEWTON_STEPS):
+        d = points - centre
+        r = np.maximum(np.linalg.norm(d, axis=1), 1e-300)
+        J = np.column_stack([-d / r[:, None], -np.ones(len(r))]) * w[:, None]
+        step, *_ = np.linalg.lstsq(J, -(r - radius) * w, rcond=None)
+        centre, radius = centre + step[:-1], radius + step[-1]
+    return centre, float(radius)
+
+
+def _snap_directions(layer, features, count):
+    """The directions of the region's new features (plane normals, axes) that are within the layer's
+    angle tolerance of a kept feature's become that direction exactly: the idealization's snapping
+    to the part's ideal directions (thesis 4.3.1), with the kept features as the part. A groove dug
+    along a face gets its axis parallel to the face."""
+    kept = []
+    for f in features[:count]:
+        key = "normal" if f["type"] == "plane" else "axis"
+        if key in f.get("params", {}):
+            kept.append(np.asarray(f["params"][key], float))
+    if not kept:
+        return
+    kept = np.array(kept)
+    kept /= np.linalg.norm(kept, axis=1)[:, None]
+    cosine = np.cos(np.radians(layer.angle_tolerance or 10.0))
+    for f in features[count:]:
+        key = "normal" if f["type"] == "plane" else "axis"
+        if key not in f.get("params", {}):
+            continue
+        direction = np.asarray(f["params"][key], float)
+        dots = kept @ (direction / np.linalg.norm(direction))
+        k = int(np.argmax(np.abs(dots)))
+        if abs(dots[k]) >= cosine:
+            f["params"] = dict(f["params"], **{key: (np.sign(dots[k]) * kept[k]).tolist()})
+
+
+def _refit_inside(V, F, labels, features, count, near):
+    """New features of the region refitted to their inner vertices, those on no other feature's
+    face: a sculpted feature's border is a transition rounded by the brushes (the rim of a groove,
+    the foot of a dome), which pulls a fit over all its vertices off the surface the rest follows.
+    Directions stay as the region's idealization made them (a cylinder's axis, a plane's normal,
+    snapped to the part's directions): a cylinder gets its section's circle, a plane its offset, a
+    sphere its centre and radius; cones and tori stay. Only where the inner vertices are at least a
+    third of them (a narrow feature has few) and MIN_REFIT_POINTS. `near`: the faces of the new
+    features and one ring around them (per face), which hold every face of their vertices."""
+    faces = np.flatnonzero(near)
+    a, b, c = V[F[faces, 0]], V[F[faces, 1]], V[F[faces, 2]]
+    areas = np.zeros(len(F))
+    areas[faces] = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    width = len(features) + 1
+    keys = np.unique(F[faces].ravel().astype(np.int64) * width + (np.repeat(labels[faces], 3) + 1))
+    owners = np.bincount(keys // width, minlength=len(V))  # the features of each vertex's faces
+    for f in features[count:]:
+        mine = faces[labels[faces] == f["id"]]
+        if f["type"] not in ("plane", "cylinder", "sphere") or not len(mine):
+            continue
+        vertices, index = np.unique(F[mine], return_inverse=True)
+        weights = np.bincount(index, weights=np.repeat(areas[mine], 3), minlength=len(vertices))
+        inside = owners[vertices] == 1
+        if inside.sum() < max(MIN_REFIT_POINTS, len(vertices) / 3.0):
+            continue
+        P, w = V[vertices[inside]], weights[inside]
+        params = dict(f["params"])
+        if f["type"] == "plane":
+            normal = np.asarray(params["normal"], float)
+            centre = (P * w[:, None]).sum(axis=0) / w.sum()
+            params["point"] = (np.asarray(params["point"], float) + ((centre - params["point"]) @ normal) * normal).tolist()
+        elif f["type"] == "cylinder":
+            axis = np.asarray(params["axis"], float)
+            u = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
+            u /= np.linalg.norm(u)
+            v = np.cross(axis, u)
+            origin = np.asarray(params["point"], float)
+            centre, radius = _ball(np.column_stack([(P - origin) @ u, (P - origin) @ v]), w)
+            params.update(point=(origin + centre[0] * u + centre[1] * v).tolist(), radius=radius)
+        else:
+            centre, radius = _ball(P, w)
+            params.update(center=centre.tolist(), radius=radius)
+        f["params"] = params
+
+
+def _dissolve_folded(V, F, labels, features, count, neighbours):
+    """New freeform pieces of the region that no B-spline surface fits (they fold over their mean
+    plane: the B-rep would facet them) are dissolved into the features around them: grown from
+    their border, each face joins the feature across one of its edges whose surface is nearest its
+    centre. Such a piece is where a sculpted surface turns a corner (a round edge ending at a
+    face): the ideal is the corner of the surfaces that meet there."""
+    for f in features[count:]:
+        mine = np.flatnonzero(labels == f["id"]) if f["type"] == "freeform" else []
+        if not len(mine):
+            continue
+        a, b, c = V[F[mine, 0]], V[F[mine, 1]], V[F[mine, 2]]
+        normals, centres = np.zeros((len(F), 3)), np.zeros((len(F), 3))
+        normals[mine], centres[mine] = np.cross(b - a, c - a), (a + b + c) / 3.0
+        vertices, index = np.unique(F[mine], return_inverse=True)
+        vertex_normals = np.zeros((len(vertices), 3))
+        for k in range(3):
+            np.add.at(vertex_normals, index.reshape(-1, 3)[:, k], normals[mine])
+        vertex_normals /= np.maximum(np.linalg.norm(vertex_normals, axis=1), 1e-300)[:, None]
+        if native.fit_bspline_surface(np.ascontiguousarray(V[vertices], float), vertex_normals,
+                                      np.ones(len(vertices)))["valid"]:
+            continue
+        left = set(mine.tolist())
+        while left:
+            best = {}
+            for face in left:
+                for other in neighbours[face]:
+                    l = labels[other] if other >= 0 else -1
+                    if other in left or l < 0 or features[l]["type"] == "freeform":
+                        continue
+                    _, d = native.onto_surface(features[l]["type"], features[l]["params"], centres[face][None, :])
+                    if face not in best or d[0] < best[face][0]:
+                        best[face] = (float(d[0]), l)
+            if not best:
+                break
+            for face, (_, l) in best.items():
+                labels[face] = l
+            left -= set(best)
+
+
+def _same_surface(feature, found, points, layer):
+    """Whether the layer's `feature` has the surface of the region's feature `found` where it lies,
+    of the same type: the region feature's surface under its `points` (their nearest points on it)
+    within the layer's distance tolerance of the feature's surface; for planes, as the idealization
+    would make them one (coplanar): normals within the layer's angle tolerance and the found plane's
+    centre within the distance tolerance of the feature's plane (a sculpted face tilts its refitted
+    pieces by a fraction of a degree, which over their length exceeds the distance tolerance)."""
     if feature["type"] != found["type"] or feature["type"] == "freeform" or len(points) == 0:
         return False
     on_found, _ = native.onto_surface(found["type"], found["params"], np.ascontiguousarray(points, float))
+    if feature["type"] == "plane":
+        normal = np.asarray(feature["params"]["normal"], float)
+        turn = np.degrees(np.arccos(min(1.0, abs(float(normal @ np.asarray(found["params"]["normal"], float))))))
+        offset = abs(float((on_found.mean(axis=0) - np.asarray(feature["params"]["point"], float)) @ normal))
+        return turn <= (layer.angle_tolerance or 10.0) and offset <= layer.distance_tolerance
     _, distance = native.onto_surface(feature["type"], feature["params"], on_found)
-    return float(distance.max()) <= tolerance
+    return float(distance.max()) <= layer.distance_tolerance
 
 
 def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
@@ -249,7 +407,8 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
             raise ValueError("one modified flag per face of the mesh (%d faces, %d flags)" % (len(F), len(modified)))
         changed |= modified
     labels = np.where(changed, -1, carried)
-    rest = changed & ~_absorb(layer, V, F, labels, changed)
+    neighbours = _region_neighbours(F, changed)
+    rest = changed & ~_absorb_into_kept(layer, V, F, labels, changed, neighbours)
     count = len(layer.features)
     features = [dict(f) for f in layer.features]
     relations = [dict(r) for r in layer.relations]
@@ -269,7 +428,7 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
         for s in sub.features:
             mine = sub_labels == s["id"]
             points = sub.mesh.vertices[np.unique(sub.mesh.faces[mine])]
-            match = [f for f in sorted(around) if _same_surface(layer.features[f], s, points, layer.distance_tolerance)]
+            match = [f for f in sorted(around) if _same_surface(layer.features[f], s, points, layer)]
             if match:
                 mapping[s["id"]] = match[0]
             elif np.any(rest[region_faces[mine]]):
@@ -286,7 +445,10 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
             members = sorted({mapping[m] for m in r["features"] if m in mapping})
             if len(members) >= 2 and any(m >= count for m in members):
                 relations.append(dict(r, features=members))
-    relations += _semi_defined(layer, V, F, labels, features, count)
+    _snap_directions(layer, features, count)
+    _refit_inside(V, F, labels, features, count, _grow(F, changed, 1))
+    relations += _semi_defined(layer, V, F, labels, features, count, neighbours)
+    _dissolve_folded(V, F, labels, features, count, neighbours)
     return _assemble(layer, mesh, labels, changed, features, relations, adjacency_before, sub_adjacency)
 
 
@@ -323,10 +485,10 @@ def _assemble(layer, mesh, labels, changed, features, relations, adjacency_befor
     order = np.argsort(edge_keys, kind="stable")
     edge_keys, owner = edge_keys[order], owner[order]
     same = edge_keys[1:] == edge_keys[:-1]
-    pairs = set()
-    for a, b in zip(owner[:-1][same].tolist(), owner[1:][same].tolist()):
-        if a != b and a >= 0 and b >= 0:
-            pairs.add((min(a, b), max(a, b)))
+    a, b = owner[:-1][same], owner[1:][same]
+    keep = (a != b) & (a >= 0) & (b >= 0)
+    low, high = np.minimum(a[keep], b[keep]), np.maximum(a[keep], b[keep])
+    pairs = [tuple(p) for p in np.unique(np.stack([low, high], axis=1), axis=0).tolist()] if keep.any() else []
     adjacency = [adjacency_before.get(p) or dict(sub_adjacency.get(p, {"continuity": "G0", "angle": 0.0, "length": 0.0}),
                                                   a=p[0], b=p[1]) for p in sorted(pairs)]
     present = {f["id"] for f in features}

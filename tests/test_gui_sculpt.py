@@ -1,8 +1,8 @@
 """GUI test of sculpt mode (issue 53) in the real FreeCAD window under xvfb-run: a block is
 idealized; Sculpt opens its panel; a drag across the top face, made of synthetic mouse events on the
-3D view, raises a bump there with the draw brush in one undo step; the layer is re-idealized (new
-features, the old ones unchanged) and its mesh changed; undo restores both, and Close leaves the
-mode.
+3D view, raises a bump there with the draw brush in one undo step, computed in a worker thread; the
+layer is re-idealized (new features, the old ones unchanged) and its mesh changed; undo restores
+both, and Close leaves the mode.
 """
 import json
 
@@ -73,7 +73,15 @@ def run():
         send(QtCore.QEvent.MouseMove, point, QtCore.Qt.LeftButton)
     result["points"] = len(panel.stroke[0]) if panel.stroke else 0
     send(QtCore.QEvent.MouseButtonRelease, path[-1], QtCore.Qt.NoButton)
-    wait(1.0)
+    QtGui.QApplication.processEvents()
+    # The stroke is sculpted and re-idealized in a worker thread: the GUI goes on meanwhile.
+    result["busy_after_release"] = panel.busy
+    result["undo_steps_while_busy"] = len(doc.UndoNames) - undo_before
+    for _ in range(600):
+        if not panel.busy:
+            break
+        wait(0.05)
+    wait(0.3)
     result["sculpted"] = mesh_state(layer)
     result["sculpted"].update({"undo_steps": len(doc.UndoNames) - undo_before,
                                "undo_name": doc.UndoNames[0] if doc.UndoNames else None,
@@ -110,6 +118,8 @@ def test_a_drag_on_the_view_sculpts_the_layer_in_one_undo_step(sculpt_run):
     assert sculpted["all_features"] > before["all_features"]  # the bump's features, after the old ones
     assert sculpted["params"] == before["params"]  # the old features unchanged
     assert sculpted["undo_steps"] == 1 and sculpted["undo_name"] == "Sculpt stroke" and sculpted["edits"] == 1
+    # It was computed in the worker: nothing stored at the release, one step once it was ready.
+    assert sculpt_run["busy_after_release"] and sculpt_run["undo_steps_while_busy"] == 0
 
 
 def test_undo_restores_the_mesh_and_the_layer_and_close_leaves(sculpt_run):

@@ -441,14 +441,15 @@ def _add_edits_property(obj):
         obj.setEditorMode("Edits", 2)
 
 
-def add_edit(obj, step):
+def add_edit(obj, step, edited=None):
     """Apply one edit (a dict, see :func:`idealize.edit.apply`) to a layer object: the object stores
     the edited layer and the edit joins its Edits, so that a recompute (its source or options
     changed) replays it. Returns the edited :class:`idealize.FeatureLayer`. Raises
     idealize.edit.EditConflict (the object unchanged) when no ideal configuration satisfies it.
-    Callers in the GUI wrap this in a transaction."""
+    `edited`: the edit's result already computed from the object's layer as it is now (by a worker
+    thread), stored as is. Callers in the GUI wrap this in a transaction."""
     from .. import edit
-    layer = edit.apply(feature_layer(obj), [step])
+    layer = edited if edited is not None else edit.apply(feature_layer(obj), [step])
     LayerRecord(layer, object_options(obj), color_mode(obj), object_edits(obj) + [dict(step)],
                 source=source_mesh(obj)).store(obj)
     return layer

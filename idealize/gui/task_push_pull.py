@@ -61,15 +61,16 @@ def regenerate_solids(obj, layer):
     return count
 
 
-def apply_in_one_step(obj, step, title):
+def apply_in_one_step(obj, step, title, edited=None):
     """Add the edit `step` to the layer object as one undo step named `title`, regenerating the
-    solids made from its source. Returns (the edited layer, solids regenerated), or None when it
-    failed: the transaction is then aborted and the error reported."""
+    solids made from its source. `edited`: the step's result, computed already (see
+    layer_object.add_edit). Returns (the edited layer, solids regenerated), or None when it failed:
+    the transaction is then aborted and the error reported."""
     from .commands import report_error
     doc = obj.Document
     doc.openTransaction(title)
     try:
-        layer = layer_object.add_edit(obj, step)
+        layer = layer_object.add_edit(obj, step, edited)
         solids = regenerate_solids(obj, layer)
         doc.recompute()
         doc.commitTransaction()

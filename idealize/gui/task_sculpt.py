@@ -2,11 +2,15 @@
 layer in the 3D view apply the chosen brush (idealize.sculpt) along the stroke, seen from the view's
 direction; a circle under the pointer shows the brush. Each stroke is one undo step: the layer's
 sculpt edit, re-idealized (idealize.reidealize), and the solids made from its source regenerated.
+The sculpting and re-idealization of a stroke run in a worker thread (the core API is free of
+FreeCAD, and its native parts release the interpreter), so the view stays interactive; strokes made
+meanwhile wait their turn, and each is stored, in the GUI's thread, when its result is ready.
 With re-idealization after each stroke turned off, the strokes are previewed and applied together,
 as one step, when the panel closes. Close or Esc leaves the mode.
 """
 import math
 import os
+import threading
 
 import FreeCADGui
 import numpy as np
@@ -18,6 +22,7 @@ from .task_push_pull import Preview, apply_in_one_step
 UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                        "Resources", "ui", "Sculpt.ui")
 CIRCLE_SEGMENTS = 48  # the brush circle's polygon: smooth at any size on screen
+POLL_MS = 30  # how often the GUI looks for a finished stroke: well below what a user notices
 
 #: The panel open now (None when none is): for macros and tests.
 active_panel = None
@@ -95,6 +100,9 @@ class SculptPanel:
         self.pending = []     # strokes kept for one re-idealization when the panel closes
         self.stroke = None    # (points, directions) of the drag under way
         self.strokes_applied = 0
+        self.queue = []       # strokes waiting for the worker
+        self.job = None       # the worker's (thread, step, the layer's Edits when it started, outcome)
+        self.timer = None
         self.callbacks = [
             (coin.SoMouseButtonEvent.getClassTypeId(), self.view.addEventCallbackPivy(
                 coin.SoMouseButtonEvent.getClassTypeId(), self.on_button)),
@@ -174,12 +182,63 @@ class SculptPanel:
                 self.pending.pop()
                 self.form.status.setText("Cannot apply: %s" % error)
             return
-        done = apply_in_one_step(self.obj, {"op": "sculpt", "strokes": [one]}, "Sculpt stroke")
-        if done is not None:
-            self.layer = done[0]
-            self.strokes_applied += 1
-            new = sum(1 for f in self.layer.features if f["triangles"])
-            self.form.status.setText("%d strokes; the layer has %d features." % (self.strokes_applied, new))
+        self.queue.append({"op": "sculpt", "strokes": [one]})
+        self.start_next()
+
+    # The worker.
+    @property
+    def busy(self):
+        """Whether strokes are still being sculpted and re-idealized."""
+        return self.job is not None or bool(self.queue)
+
+    def start_next(self):
+        """Starts the next waiting stroke in a worker thread, from the layer as it is now."""
+        from PySide import QtCore
+        from .. import edit
+        if self.job is not None or not self.queue:
+            return
+        step, base, outcome = self.queue.pop(0), self.layer, {}
+
+        def work():
+            try:
+                outcome["layer"] = edit.apply(base, [step])
+            except Exception as error:  # reported in the GUI's thread
+                outcome["error"] = error
+        thread = threading.Thread(target=work, name="Idealize sculpt", daemon=True)
+        self.job = (thread, step, getattr(self.obj, "Edits", ""), outcome)
+        self.form.status.setText("Re-idealizing the stroke...")
+        thread.start()
+        if self.timer is None:
+            self.timer = QtCore.QTimer()
+            self.timer.timeout.connect(self.poll)
+        self.timer.start(POLL_MS)
+
+    def poll(self, wait=False):
+        """Stores the worker's result once it is ready (at once with `wait`), then starts the next."""
+        if self.job is None:
+            return
+        thread, step, edits, outcome = self.job
+        if wait:
+            thread.join()
+        if thread.is_alive():
+            return
+        self.job = None
+        if self.timer is not None:
+            self.timer.stop()
+        if "error" in outcome:
+            from .commands import report_error
+            report_error("Sculpt stroke", outcome["error"])
+        else:
+            # Computed from the layer as it was: stored as is unless the object changed meanwhile
+            # (an undo), when it is computed again from the object's layer.
+            edited = outcome["layer"] if getattr(self.obj, "Edits", "") == edits else None
+            done = apply_in_one_step(self.obj, step, "Sculpt stroke", edited)
+            if done is not None:
+                self.layer = done[0]
+                self.strokes_applied += 1
+                new = sum(1 for f in self.layer.features if f["triangles"])
+                self.form.status.setText("%d strokes; the layer has %d features." % (self.strokes_applied, new))
+        self.start_next()
 
     # Leaving.
     def close(self):
@@ -190,6 +249,10 @@ class SculptPanel:
         self.viewport.removeEventFilter(self.release_filter)
         self.circle.hide()
         self.preview.hide()
+        while self.busy:  # the strokes made are all stored
+            self.poll(wait=True)
+        if self.timer is not None:
+            self.timer.stop()
         if self.pending:
             apply_in_one_step(self.obj, {"op": "sculpt", "strokes": self.pending}, "Sculpt")
             self.pending = []
