@@ -319,3 +319,39 @@ def test_a_bump_flattened_away_is_absorbed_by_its_face(box_layer):
     assert all(f["triangles"] == 0 for f in layer.features[len(box_layer.features):])
     assert set(np.asarray(layer.labels)[sculptor.modified()].tolist()) == {top}
     assert idealize.make_solid(layer).solid
+
+
+def test_a_groove_sculpted_towards_a_cylinder_becomes_it_with_the_faces_direction():
+    """The groove's cylinder: its axis exactly the block's x (snapped to the kept faces' directions),
+    its radius and axis within 2 % of the target's (refitted to its inner vertices, away from the
+    rim the brushes rounded). On a mesh of 1 mm: four edges across the groove's radius."""
+    if shapes.freecad() is None:
+        pytest.skip("FreeCAD is not installed")
+    FreeCAD, Part, _ = shapes.freecad()
+    box_layer = shapes.quality_layer(Part.makeBox(60, 40, 20), 1.0)[0]
+    targets = shapes.bench_module("sculpt_targets")
+    radius, depth, y = 4.0, 2.5, 20.0
+    sculptor = sculpt.Sculptor(box_layer)
+    target = targets.groove((60.0, 40.0, 20.0), y, 20.0 + radius - depth, radius)
+    width = (radius ** 2 - (radius - depth) ** 2) ** 0.5
+    targets.sculpt_towards(sculptor, target, [width, 0.6 * width, 0.35 * width], 0.01 * radius, 300)
+    mesh = sculptor.mesh()
+    layer = idealize.reidealize(box_layer, mesh, sculptor.modified())
+    bottom = int(np.argmin(np.linalg.norm(mesh.vertices - [30.0, y, 20.0 - depth], axis=1)))
+    face = int(np.flatnonzero((mesh.faces == bottom).any(axis=1))[0])
+    groove = layer.features[layer.labels[face]]
+    assert groove["id"] >= len(box_layer.features) and groove["type"] == "cylinder"
+    p = groove["params"]
+    assert any(np.array_equal(np.abs(p["axis"]), np.abs(f["params"]["normal"])) for f in box_layer.features)
+    assert abs(p["axis"][0]) == pytest.approx(1.0)
+    assert p["radius"] == pytest.approx(radius, rel=0.02)
+    assert [p["point"][1], p["point"][2]] == pytest.approx([y, 20.0 + radius - depth], abs=0.02 * radius)
+    assert idealize.make_solid(layer).solid
+
+
+def test_a_region_can_be_identified_as_measured(box_layer):
+    """`measured` overrides the mesh kind that most of a mesh's patches suggest (the ring of CAD
+    faces around a sculpted region)."""
+    mesh = box_layer.mesh
+    assert box_layer.mesh_kind == "exact tessellation"
+    assert idealize.idealize(mesh, measured=True).mesh_kind != "exact tessellation"

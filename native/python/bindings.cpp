@@ -29,13 +29,6 @@ namespace {
 
 using VectorXi32 = Eigen::Matrix<int, Eigen::Dynamic, 1>;
 
-TriangleMesh make_mesh(const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F) {
-  TriangleMesh mesh;
-  mesh.V = V;
-  mesh.F = F;
-  return mesh;
-}
-
 VectorXi32 to_array(const std::vector<int>& values) {
   return Eigen::Map<const VectorXi32>(values.data(), static_cast<Eigen::Index>(values.size()));
 }
@@ -239,7 +232,7 @@ PYBIND11_MODULE(_native, m) {
       "segment",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, Progress* progress,
          bool self_intersections) {
-        const TriangleMesh mesh = make_mesh(V, F);
+        const TriangleMesh mesh = mesh_from(V, F);
         SegmentationOptions options;
         options.progress = progress;
         if (self_intersections) options.check.self_intersections = count_self_intersections;
@@ -260,7 +253,7 @@ PYBIND11_MODULE(_native, m) {
          const std::vector<double>& patch_mean, const std::vector<double>& patch_gaussian, double zero_low,
          double zero_high, Progress* progress, double angle_tolerance_degrees, double distance_tolerance,
          double radius_tolerance, bool idealize, bool measured) {
-        const TriangleMesh mesh = make_mesh(V, F);
+        const TriangleMesh mesh = mesh_from(V, F);
         if (patch_mean.size() != patch_gaussian.size())
           throw MeshError("one mean and one Gaussian curvature per patch are needed");
         std::vector<PatchCurvature> curvature(patch_mean.size());
@@ -392,7 +385,7 @@ PYBIND11_MODULE(_native, m) {
         if (types.size() != params.size()) throw std::invalid_argument("one type and one parameter set per feature");
         std::vector<Surface> surfaces;
         for (size_t i = 0; i < types.size(); ++i) surfaces.push_back(surface_from_params(types[i], params[i]));
-        const TriangleMesh mesh = make_mesh(V, F);
+        const TriangleMesh mesh = mesh_from(V, F);
         BrepOptions options;
         options.tolerance = tolerance;
         options.progress = progress;
@@ -424,7 +417,7 @@ PYBIND11_MODULE(_native, m) {
       "mesh_distances",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F,
          const Eigen::Ref<const MatrixX3d>& points, Progress* progress) {
-        const TriangleMesh mesh = make_mesh(V, F);
+        const TriangleMesh mesh = mesh_from(V, F);
         const MatrixX3d query = points;
         std::vector<double> distances;
         {
@@ -496,7 +489,7 @@ PYBIND11_MODULE(_native, m) {
   m.def(
       "vertex_curvature",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F) {
-        const TriangleMesh mesh = make_mesh(V, F);
+        const TriangleMesh mesh = mesh_from(V, F);
         VertexCurvature c;
         {
           py::gil_scoped_release release;
@@ -518,7 +511,7 @@ PYBIND11_MODULE(_native, m) {
       "remesh_isotropic",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, double target_edge_length,
          int iterations) {
-        const TriangleMesh mesh = make_mesh(V, F);
+        const TriangleMesh mesh = mesh_from(V, F);
         TriangleMesh out;
         {
           py::gil_scoped_release release;
@@ -533,7 +526,7 @@ PYBIND11_MODULE(_native, m) {
       "closest_faces",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F,
          const Eigen::Ref<const MatrixX3d>& points) {
-        const TriangleMesh mesh = make_mesh(V, F);
+        const TriangleMesh mesh = mesh_from(V, F);
         const MatrixX3d query = points;
         std::vector<int> faces;
         {

@@ -22,8 +22,6 @@ namespace py = pybind11;
 
 namespace {
 
-using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
-using RowMatrixX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 EditParameter parameter_named(const std::string& name) {
   static const std::map<std::string, EditParameter> names{{"none", EditParameter::None},
@@ -78,13 +76,6 @@ std::vector<Surface> surfaces_from(const std::vector<std::string>& types, const 
   std::vector<Surface> surfaces;
   for (size_t i = 0; i < types.size(); ++i) surfaces.push_back(surface_from_params(types[i], params[i]));
   return surfaces;
-}
-
-TriangleMesh mesh_from(const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F) {
-  TriangleMesh mesh;
-  mesh.V = V;
-  mesh.F = F;
-  return mesh;
 }
 
 EditOptions structure_options(double distance_tolerance, bool remesh, std::vector<double> target_edge_lengths) {

@@ -18,8 +18,6 @@ namespace py = pybind11;
 
 namespace {
 
-using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
-using RowMatrixX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 }  // namespace
 
@@ -28,10 +26,7 @@ void bind_sculpt(py::module_& m) {
                          "A mesh being sculpted: strokes of brushes with dynamic topology (native/src/sculpt).")
       .def(py::init([](const Eigen::Ref<const RowMatrixX3d>& V, const Eigen::Ref<const RowMatrixX3i>& F,
                        const std::vector<int>& labels) {
-             TriangleMesh mesh;
-             mesh.V = V;
-             mesh.F = F;
-             return std::make_unique<SculptMesh>(mesh, labels);
+             return std::make_unique<SculptMesh>(mesh_from(V, F), labels);
            }),
            py::arg("V"), py::arg("F"), py::arg("labels") = std::vector<int>(),
            "From V (#V x 3), F (#F x 3, a consistently oriented manifold) and per-face labels (or none). Raises "

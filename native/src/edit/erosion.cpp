@@ -17,12 +17,6 @@ namespace idealize {
 
 namespace {
 
-std::string names(const std::set<int>& features) {
-  std::string s;
-  for (int f : features) s += (s.empty() ? "" : ", ") + std::to_string(f);
-  return s;
-}
-
 int find(std::vector<int>& parent, int x) {
   while (parent[x] != x) x = parent[x] = parent[parent[x]];
   return x;
@@ -101,7 +95,7 @@ class GapCloser {
     std::set<int> involved;
     for (int a : open_) involved.insert({arcs_[a].host, arcs_[next(a)].host});
     if (m < 3 || m > kMostUnpaired)
-      throw EditConflict("the gap's border passes between features " + names(involved) +
+      throw EditConflict("the gap's border passes between features " + feature_list(involved) +
                          " in a way their edges cannot close: the edges entering it do not pair up");
     std::optional<ErodedGap> best;
     double shortest = std::numeric_limits<double>::infinity();
@@ -250,7 +244,7 @@ class GapCloser {
       bool on = !corner || (((q - g.low_).array() >= 0.0).all() && ((g.high_ - q).array() >= 0.0).all());
       for (int h : hosts) on &= std::abs(signed_distance(g.surfaces_[h], q)) <= g.tolerance_;
       if (!on)
-        throw EditConflict("the surfaces of features " + names(std::set<int>(hosts.begin(), hosts.end())) +
+        throw EditConflict("the surfaces of features " + feature_list(std::set<int>(hosts.begin(), hosts.end())) +
                            " do not meet inside the gap: no edge between them closes it");
       return q;
     }
@@ -290,7 +284,7 @@ class GapCloser {
         const std::array<int, 3>& tri = triangles[t];
         std::set<int> hosts{region(tri[0]), region(tri[1]), region(tri[2])};
         if (hosts.size() < 3)
-          throw EditConflict("features " + names(hosts) + " cannot meet at a corner inside the gap");
+          throw EditConflict("features " + feature_list(hosts) + " cannot meet at a corner inside the gap");
         Eigen::Vector3d start = Eigen::Vector3d::Zero();  // near the transitions of its regions
         int count = 0;
         for (int i = 0; i < m(); ++i)
@@ -395,7 +389,7 @@ class GapCloser {
         }
       if (triangles.empty())
         throw EditConflict(
-            "feature" + std::string(features.size() > 1 ? "s " : " ") + names(features) + " cannot close over the gap: " +
+            "feature" + std::string(features.size() > 1 ? "s " : " ") + feature_list(features) + " cannot close over the gap: " +
             (winds ? "it would go round the cylinder"
                    : "its border there is not a hole in that face (it would take the face's outline with it)"));
       for (const std::array<int, 3>& t : triangles) {

@@ -27,13 +27,13 @@ namespace {
 constexpr int kClosingRounds = 5;
 
 
+}  // namespace
+
 std::string feature_list(const std::set<int>& features) {
   std::string s;
   for (int f : features) s += (s.empty() ? "" : ", ") + std::to_string(f);
   return s;
 }
-
-}  // namespace
 
 void take_rim_triangles(const TriangleMesh& mesh, int group, std::vector<int>& group_labels) {
   const MeshTopology topology(mesh);

@@ -18,6 +18,9 @@
 
 namespace idealize {
 
+// The ids of `features`, comma separated, for messages.
+std::string feature_list(const std::set<int>& features);
+
 // A host triangle that shares an edge with the group (faces labelled `group` in `labels`) and has
 // all three corners on its border lies inside the group's outline: a tessellation's triangle that
 // straddles the edge where the group meets its host, labelled with the host. Such triangles join
