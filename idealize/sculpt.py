@@ -22,18 +22,62 @@ import numpy as np
 
 from . import _native as native
 from .features import as_feature_layer
-from .mesh import Mesh
+from .mesh import Mesh, MeshError
 
 BRUSHES = ("draw", "inflate", "flatten", "smooth", "pinch", "crease", "grab")
 
 
 def _mesh_and_labels(layer_or_mesh):
-    """(vertices, faces, labels): a layer's idealized mesh and feature labels, or a mesh's with
-    none (-1)."""
+    """(vertices, faces, labels): a layer's idealized mesh (its faces with the segmentation's
+    orientation repair) and feature labels, or a mesh's with none (-1)."""
     if isinstance(layer_or_mesh, Mesh):
         return layer_or_mesh.vertices, layer_or_mesh.faces, None
     layer = as_feature_layer(layer_or_mesh)
-    return layer.idealized_vertices, layer.mesh.faces, np.asarray(layer.labels, dtype=np.int64)
+    return layer.idealized_vertices, np.asarray(layer.oriented_faces), np.asarray(layer.labels, dtype=np.int64)
+
+
+def split_where_not_manifold(vertices, faces):
+    """(vertices, faces) with the mesh cut apart where it is not a consistently oriented manifold, so
+    that a half-edge structure holds it: an edge of more than two faces, or of two faces that run
+    along it the same way, joins none of them, and a vertex whose faces make several fans (joined
+    across such edges) gets a copy of itself for each fan after the first. No face is lost or moved:
+    the mesh gets borders where it was cut. The input is not modified."""
+    F = np.asarray(faces, dtype=np.int64)
+    count = len(F)
+    corner = np.arange(3 * count).reshape(-1, 3)
+    heads, tails = F, np.roll(F, -1, axis=1)
+    key = np.minimum(heads, tails).ravel() * (int(F.max()) + 1 if count else 1) + np.maximum(heads, tails).ravel()
+    order = np.argsort(key, kind="stable")
+    _, start, sizes = np.unique(key[order], return_index=True, return_counts=True)
+    first, second = order[start[sizes == 2]], order[start[sizes == 2] + 1]  # half-edges, as face * 3 + k
+    forward = heads.ravel()
+    opposite = forward[first] != forward[second]  # the two faces run along the edge in turn
+    first, second = first[opposite], second[opposite]
+    # Across a shared edge a -> b (in the first face) and b -> a (in the second), the corners at a
+    # are one vertex, and so are those at b.
+    at_a = (first, second // 3 * 3 + (second % 3 + 1) % 3)
+    at_b = (first // 3 * 3 + (first % 3 + 1) % 3, second)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    rows = np.concatenate([at_a[0], at_b[0]])
+    cols = np.concatenate([at_a[1], at_b[1]])
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(3 * count, 3 * count))
+    _, fan = connected_components(graph, directed=False)
+    original = forward  # the vertex of each corner
+    fans, first_corner = np.unique(fan, return_index=True)
+    fan_vertex = original[first_corner]
+    # The first fan of each vertex keeps its index; the others are copies appended in fan order.
+    order = np.lexsort((fans, fan_vertex))
+    keeps = np.ones(len(fans), dtype=bool)
+    keeps[order[1:]] = fan_vertex[order[1:]] != fan_vertex[order[:-1]]
+    index = np.empty(len(fans), dtype=np.int64)
+    index[keeps] = fan_vertex[keeps]
+    extra = np.flatnonzero(~keeps)
+    index[extra] = len(vertices) + np.arange(len(extra))
+    V = np.concatenate([np.asarray(vertices, dtype=np.float64), np.asarray(vertices, dtype=np.float64)[fan_vertex[extra]]])
+    lookup = np.empty(fan.max() + 1 if count else 0, dtype=np.int64)
+    lookup[fans] = index
+    return V, lookup[fan[corner]]
 
 
 def _points(array, name):
@@ -46,13 +90,25 @@ def _points(array, name):
 class Sculptor:
     """A mesh (or a feature layer's idealized mesh) being sculpted stroke by stroke. The input is
     never modified. Faces carry the feature label of the face they came from; ``modified()`` says
-    which faces strokes changed since ``clear_marks()``."""
+    which faces strokes changed since ``clear_marks()``.
+
+    A mesh that is not a consistently oriented manifold (a real scan's or export's: edges of more
+    than two faces, fans touching at a vertex) is cut apart there first
+    (:func:`split_where_not_manifold`; ``repaired`` says so): every face is kept, and a stroke across
+    such a cut moves its two sides apart as far as they are apart in the brush's reach."""
 
     def __init__(self, layer_or_mesh):
         vertices, faces, labels = _mesh_and_labels(layer_or_mesh)
-        self._native = native.Sculptor(np.ascontiguousarray(vertices, dtype=np.float64),
-                                       np.ascontiguousarray(faces, dtype=np.int32),
-                                       [] if labels is None else labels.tolist())
+        labels = [] if labels is None else labels.tolist()
+        self.repaired = False
+        try:
+            self._native = native.Sculptor(np.ascontiguousarray(vertices, dtype=np.float64),
+                                           np.ascontiguousarray(faces, dtype=np.int32), labels)
+        except MeshError:
+            vertices, faces = split_where_not_manifold(vertices, faces)
+            self._native = native.Sculptor(np.ascontiguousarray(vertices, dtype=np.float64),
+                                           np.ascontiguousarray(faces, dtype=np.int32), labels)
+            self.repaired = True
         self._snapshot = None
 
     def stroke(self, brush, points, directions=None, radius=1.0, strength=0.5, spacing=0.2, target_edge_length=0.0,
@@ -127,4 +183,4 @@ def stroke(layer_or_mesh, brush, points, directions=None, radius=1.0, strength=0
     return sculptor.mesh(), sculptor.modified()
 
 
-__all__ = ["BRUSHES", "Sculptor", "sculpt", "stroke"]
+__all__ = ["BRUSHES", "Sculptor", "sculpt", "split_where_not_manifold", "stroke"]

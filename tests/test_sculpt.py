@@ -146,11 +146,10 @@ def test_bad_input_is_refused_with_a_message(sphere):
         sculpt.stroke(sphere, "draw", points, directions[:2], radius=2.0)
     with pytest.raises(ValueError, match="finite"):
         sculpt.stroke(sphere, "draw", [[np.nan, 0, 0]], None, radius=2.0)
-    # Three faces on one edge: not a manifold.
-    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], float)
-    F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
-    with pytest.raises(idealize.MeshError, match="more than two faces"):
-        sculpt.Sculptor(idealize.Mesh(V, F))
+    # Faces on vertices that do not exist.
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    with pytest.raises(idealize.MeshError):
+        sculpt.Sculptor(idealize.Mesh(V, np.array([[0, 1, 7]])))
 
 
 @pytest.mark.skipif(shapes.freecad() is None, reason="FreeCAD is not installed")
@@ -355,3 +354,41 @@ def test_a_region_can_be_identified_as_measured(box_layer):
     mesh = box_layer.mesh
     assert box_layer.mesh_kind == "exact tessellation"
     assert idealize.idealize(mesh, measured=True).mesh_kind != "exact tessellation"
+
+
+def _two_cubes_sharing_an_edge():
+    """Two unit cubes touching along one edge (that edge has four faces), as a real export has it."""
+    corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    faces = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+    second = corners + [1.0, 1.0, 0.0]  # shares the edge x = y = 1 with the first
+    V = np.concatenate([corners, second])
+    F = np.concatenate([faces, faces + 8])
+    # Weld the shared edge's two vertices.
+    V, index = np.unique(V, axis=0, return_inverse=True)
+    return V, index[F]
+
+
+def test_a_mesh_that_is_not_manifold_is_cut_apart_to_be_sculpted():
+    V, F = _two_cubes_sharing_an_edge()
+    with pytest.raises(idealize.MeshError):
+        from idealize import _native
+        _native.Sculptor(np.ascontiguousarray(V), np.ascontiguousarray(F, dtype=np.int32), [])
+    V2, F2 = sculpt.split_where_not_manifold(V, F)
+    # Every face kept, at the same place; the shared edge's two vertices copied once each.
+    assert len(F2) == len(F) and np.array_equal(V2[F2], V[F])
+    assert len(V2) == len(V) + 2
+    directed = np.concatenate([F2[:, [0, 1]], F2[:, [1, 2]], F2[:, [2, 0]]])
+    _, counts = np.unique(np.sort(directed, axis=1), axis=0, return_counts=True)
+    assert counts.max() == 2 and len(np.unique(directed, axis=0)) == len(directed)
+    sculptor = sculpt.Sculptor(idealize.Mesh(V, F))
+    assert sculptor.repaired
+    sculptor.stroke("draw", [[0.5, 0.5, 1.0]], [[0, 0, -1.0]], radius=1.2, strength=0.5)
+    assert sculptor.modified().any()
+    # Three faces on one edge: each its own sheet along it.
+    V3 = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], float)
+    F3 = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    V4, F4 = sculpt.split_where_not_manifold(V3, F3)
+    assert np.array_equal(V4[F4], V3[F3]) and len(np.unique(F4)) == 5 + 4  # the edge's ends, twice more each
+    # A manifold mesh is left as it is.
+    assert not sculpt.Sculptor(idealize.Mesh(V, F[:12])).repaired
