@@ -10,14 +10,18 @@ parameters exactly.
 Without `modified`, the faces that are not triangles of the layer's idealized mesh (the same three
 vertices, to rounding) count as modified: a mesh exported, sculpted elsewhere and read back.
 
-How the region is merged back:
+How the region is merged back (docs/sculpting.md, section 4):
 
 - Faces the sculpting did not change keep their features, in the region's ring too.
-- The region is idealized as a mesh of its own (the layer's tolerances). Each feature found there
-  is matched to a feature of the layer around it with the same surface where it lies (of the same
-  type, within the layer's distance tolerance): a bump flattened back into its face becomes that
-  face again, with its parameters unchanged. Features that match none are new, with ids after the
-  layer's.
+- Changed faces on the surface of a kept feature across one of their edges join it first, grown
+  from the faces the sculpting left: a bump flattened back into its face becomes that face.
+- The rest is idealized as a mesh of its own (the layer's tolerances, as a measured mesh). Each
+  feature found there is matched to a feature of the layer around it with the same surface where it
+  lies; features that match none are new, with ids after the layer's.
+- New features are made ideal against the kept ones (the thesis's semi-defined features): their
+  directions snap to the kept features', planes, cylinders and spheres are refitted to their inner
+  vertices, a round between two kept planes becomes the cylinder tangent to both, and freeform
+  pieces that no B-spline fits are dissolved into their neighbours.
 - Vertices of modified faces move onto their feature's surface; vertices that unmodified faces
   share stay where they are, so those faces stay exactly as they were.
 - A feature of the layer left without faces keeps its id, with no triangles.
