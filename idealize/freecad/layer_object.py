@@ -447,12 +447,32 @@ def add_edit(obj, step, edited=None):
     changed) replays it. Returns the edited :class:`idealize.FeatureLayer`. Raises
     idealize.edit.EditConflict (the object unchanged) when no ideal configuration satisfies it.
     `edited`: the edit's result already computed from the object's layer as it is now (by a worker
-    thread), stored as is. Callers in the GUI wrap this in a transaction."""
+    thread), stored as is: the edited :class:`idealize.FeatureLayer`, or its :class:`LayerRecord`
+    (:func:`edit_record`). Callers in the GUI wrap this in a transaction."""
     from .. import edit
+    if isinstance(edited, LayerRecord):
+        edited.store(obj)
+        return edited.layer
     layer = edited if edited is not None else edit.apply(feature_layer(obj), [step])
     LayerRecord(layer, object_options(obj), color_mode(obj), object_edits(obj) + [dict(step)],
                 source=source_mesh(obj)).store(obj)
     return layer
+
+
+def edit_inputs(obj, layer=None, source=None):
+    """What :func:`edit_record` needs of a layer object, read in the GUI thread: (its layer, options,
+    colour mode, edits so far, source mesh). `layer` and `source`: the object's layer and source mesh
+    when the caller has them already (a panel that keeps them between edits)."""
+    return (layer if layer is not None else feature_layer(obj), object_options(obj), color_mode(obj),
+            object_edits(obj), source if source is not None else source_mesh(obj))
+
+
+def edit_record(inputs, step):
+    """The :class:`LayerRecord` of `step` applied to a layer object whose :func:`edit_inputs` are
+    `inputs`: all of add_edit's work that needs no document, for a worker thread."""
+    from .. import edit
+    layer, options, mode, edits, source = inputs
+    return LayerRecord(edit.apply(layer, [step]), options, mode, list(edits) + [dict(step)], source=source)
 
 
 def make_feature_layer(source, layer=None, doc=None):

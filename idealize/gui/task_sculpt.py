@@ -2,9 +2,10 @@
 layer in the 3D view apply the chosen brush (idealize.sculpt) along the stroke, seen from the view's
 direction; a circle under the pointer shows the brush. Each stroke is one undo step: the layer's
 sculpt edit, re-idealized (idealize.reidealize), and the solids made from its source regenerated.
-The sculpting and re-idealization of a stroke run in a worker thread (the core API is free of
-FreeCAD, and its native parts release the interpreter), so the view stays interactive; strokes made
-meanwhile wait their turn, and each is stored, in the GUI's thread, when its result is ready.
+The sculpting and re-idealization of a stroke, and the preparation of what the layer object stores,
+run in a worker thread (the core API is free of FreeCAD, and its native parts release the
+interpreter), so the view stays interactive; strokes made meanwhile wait their turn, and each is
+stored, in the GUI's thread, when its result is ready.
 With re-idealization after each stroke turned off, the strokes are previewed and applied together,
 as one step, when the panel closes. Close or Esc leaves the mode.
 """
@@ -103,6 +104,7 @@ class SculptPanel:
         self.queue = []       # strokes waiting for the worker
         self.job = None       # the worker's (thread, step, the layer's Edits when it started, outcome)
         self.timer = None
+        self.source = None    # the source mesh, read once
         self.callbacks = [
             (coin.SoMouseButtonEvent.getClassTypeId(), self.view.addEventCallbackPivy(
                 coin.SoMouseButtonEvent.getClassTypeId(), self.on_button)),
@@ -194,14 +196,17 @@ class SculptPanel:
     def start_next(self):
         """Starts the next waiting stroke in a worker thread, from the layer as it is now."""
         from PySide import QtCore
-        from .. import edit
         if self.job is not None or not self.queue:
             return
-        step, base, outcome = self.queue.pop(0), self.layer, {}
+        step, outcome = self.queue.pop(0), {}
+        if self.source is None:
+            self.source = layer_object.source_mesh(self.obj)  # it does not change while sculpting
+        # Read here: the document belongs to this thread.
+        inputs = layer_object.edit_inputs(self.obj, self.layer, self.source)
 
         def work():
             try:
-                outcome["layer"] = edit.apply(base, [step])
+                outcome["record"] = layer_object.edit_record(inputs, step)
             except Exception as error:  # reported in the GUI's thread
                 outcome["error"] = error
         thread = threading.Thread(target=work, name="Idealize sculpt", daemon=True)
@@ -231,7 +236,7 @@ class SculptPanel:
         else:
             # Computed from the layer as it was: stored as is unless the object changed meanwhile
             # (an undo), when it is computed again from the object's layer.
-            edited = outcome["layer"] if getattr(self.obj, "Edits", "") == edits else None
+            edited = outcome["record"] if getattr(self.obj, "Edits", "") == edits else None
             done = apply_in_one_step(self.obj, step, "Sculpt stroke", edited)
             if done is not None:
                 self.layer = done[0]
