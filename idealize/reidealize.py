@@ -262,10 +262,11 @@ def _ball(points, weights):
 
 
 def _snap_directions(layer, features, count):
-    """The directions of the region's new features (plane normals, axes) that are within the layer's
-    angle tolerance of a kept feature's become that direction exactly: the idealization's snapping
-    to the part's ideal directions (thesis 4.3.1), with the kept features as the part. A groove dug
-    along a face gets its axis parallel to the face."""
+    """The directions of the region's new planes and cylinders (normals, axes) that are within the
+    layer's angle tolerance of a kept feature's become that direction exactly: the idealization's
+    snapping to the part's ideal directions (thesis 4.3.1), with the kept features as the part. A
+    groove dug along a face gets its axis parallel to the face. (Their positions are refitted about
+    the new direction next; cones and tori, which are not, keep theirs.)"""
     kept = []
     for f in features[:count]:
         key = "normal" if f["type"] == "plane" else "axis"
@@ -277,9 +278,9 @@ def _snap_directions(layer, features, count):
     kept /= np.linalg.norm(kept, axis=1)[:, None]
     cosine = np.cos(np.radians(layer.angle_tolerance or 10.0))
     for f in features[count:]:
-        key = "normal" if f["type"] == "plane" else "axis"
-        if key not in f.get("params", {}):
+        if f["type"] not in ("plane", "cylinder"):  # the two that _refit_inside refits about it
             continue
+        key = "normal" if f["type"] == "plane" else "axis"
         direction = np.asarray(f["params"][key], float)
         dots = kept @ (direction / np.linalg.norm(direction))
         k = int(np.argmax(np.abs(dots)))

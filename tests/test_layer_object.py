@@ -279,3 +279,31 @@ def test_edits_are_kept_replayed_on_recompute_and_saved(document, tmp_path):
     again = idealize.feature_layer(reopened.getObject(name))
     assert again.features[top]["params"]["point"][2] == pytest.approx(24.0)
     assert reopened.getObject("Bracket").Mesh.Topology == before.Topology
+
+
+@needs_freecad
+def test_an_edit_prepared_in_another_thread_stores_what_add_edit_would(document):
+    """edit_inputs (read in the GUI thread) and edit_record (a worker's): storing the record gives
+    the object what add_edit computing it there gives, edits and all."""
+    FreeCAD, doc = document
+    import threading
+    import idealize
+    from idealize.freecad import layer_object
+    source, V, F = bracket_object(doc)
+    first, second = idealize.make_feature_layer(source), idealize.make_feature_layer(source)
+    top = [f["id"] for f in json.loads(first.FeatureTable)["features"] if f["type"] == "plane"
+           and f["params"]["normal"][2] > 0.99 and abs(f["params"]["point"][2] - 20) < 1e-6][0]
+    step = {"op": "push_pull", "feature_id": top, "distance": 4.0}
+    inputs = layer_object.edit_inputs(first)
+    made = {}
+    worker = threading.Thread(target=lambda: made.update(record=layer_object.edit_record(inputs, step)))
+    worker.start()
+    worker.join()
+    stored = layer_object.add_edit(first, step, made["record"])
+    computed = layer_object.add_edit(second, step)
+    doc.recompute()
+    assert "Touched" not in first.State
+    assert first.Edits == second.Edits and json.loads(first.Edits) == [step]
+    assert first.FeatureTable == second.FeatureTable and first.Labels == second.Labels
+    assert first.Mesh.Topology == second.Mesh.Topology
+    assert np.array_equal(stored.idealized_vertices, computed.idealized_vertices)
