@@ -32,6 +32,29 @@ os._exit(0)
 '''
 
 
+# Synthetic mouse events on the 3D view, for the driver scripts that drag in it (a driver that uses
+# them includes this text): mouse_events(view) gives screen(point) -> the widget position of a 3D
+# point, and send(kind, position, buttons) -> that event sent to the view's viewport.
+MOUSE = r'''
+
+def mouse_events(view):
+    from PySide import QtCore, QtGui
+    widget = view.graphicsView().viewport()
+
+    def screen(point):
+        sx, sy = view.getPointOnScreen(App.Vector(*point))
+        return QtCore.QPoint(int(sx), int(widget.height() - sy))
+
+    def send(kind, position, buttons):
+        event = QtGui.QMouseEvent(kind, position, widget.mapToGlobal(position), QtCore.Qt.LeftButton
+                                  if kind != QtCore.QEvent.MouseMove else QtCore.Qt.NoButton,
+                                  buttons, QtCore.Qt.NoModifier)
+        QtGui.QApplication.sendEvent(widget, event)
+        QtGui.QApplication.processEvents()
+    return screen, send
+'''
+
+
 class DriverError(RuntimeError):
     """FreeCAD ended without writing its result."""
 

@@ -68,18 +68,7 @@ def run():
     form.brush.setCurrentIndex(form.brush.findData("draw"))
     form.radius.setValue(radius)
     form.strength.setValue(0.5)
-    widget = view.graphicsView().viewport()
-
-    def screen(x, y):
-        sx, sy = view.getPointOnScreen(App.Vector(x, y, 20))
-        return QtCore.QPoint(int(sx), int(widget.height() - sy))
-
-    def send(kind, point, buttons):
-        event = QtGui.QMouseEvent(kind, point, widget.mapToGlobal(point), QtCore.Qt.LeftButton
-                                  if kind != QtCore.QEvent.MouseMove else QtCore.Qt.NoButton,
-                                  buttons, QtCore.Qt.NoModifier)
-        QtGui.QApplication.sendEvent(widget, event)
-        QtGui.QApplication.processEvents()
+    screen, send = mouse_events(view)
 
     ticks = []
     timer = QtCore.QTimer()
@@ -88,7 +77,7 @@ def run():
     strokes = []
     for k in range(CONFIG["strokes"]):
         y = 15.0 + 30.0 * k / max(1, CONFIG["strokes"] - 1)
-        path = [screen(20 + 4 * radius * t / 10, y) for t in range(11)]
+        path = [screen((20 + 4 * radius * t / 10, y, 20)) for t in range(11)]
         moves = []
         send(QtCore.QEvent.MouseMove, path[0], QtCore.Qt.NoButton)
         send(QtCore.QEvent.MouseButtonPress, path[0], QtCore.Qt.LeftButton)
@@ -123,7 +112,7 @@ def main(argv=None) -> int:
               "stroke_triangles": STROKE_TRIANGLES}
     with tempfile.TemporaryDirectory() as tmp:
         config["result"] = str(Path(tmp) / "result.json")
-        result = gui_driver.run_in_freecad_gui(DRIVER, config, Path(tmp) / "driver.py", timeout=900)
+        result = gui_driver.run_in_freecad_gui(gui_driver.MOUSE + DRIVER, config, Path(tmp) / "driver.py", timeout=900)
     if "exception" in result:
         raise SystemExit(result["exception"])
     moves = [m for s in result["strokes"] for m in s["moves_ms"]]

@@ -85,11 +85,11 @@ def _face_neighbours(F):
     return neighbour.reshape(-1, 3)
 
 
-def _region_neighbours(F, changed):
-    """:func:`_face_neighbours` for the changed faces (their neighbours are in the one ring around
-    them, whose faces' own neighbours outside it are left -1): the edges of the whole mesh need not
-    be sorted for a local change."""
-    near = np.flatnonzero(_grow(F, changed, 1))
+def _region_neighbours(F, near):
+    """:func:`_face_neighbours` for the changed faces, from `near` (per face: the changed faces and
+    the one ring around them, which holds their neighbours; the ring's own neighbours outside it are
+    left -1): the edges of the whole mesh need not be sorted for a local change."""
+    near = np.flatnonzero(near)
     neighbours = np.full((len(F), 3), -1, dtype=np.int64)
     if len(near):
         local = _face_neighbours(F[near])
@@ -412,7 +412,8 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
             raise ValueError("one modified flag per face of the mesh (%d faces, %d flags)" % (len(F), len(modified)))
         changed |= modified
     labels = np.where(changed, -1, carried)
-    neighbours = _region_neighbours(F, changed)
+    near = _grow(F, changed, 1)  # the changed faces and their ring: what the steps below look at
+    neighbours = _region_neighbours(F, near)
     rest = changed & ~_absorb_into_kept(layer, V, F, labels, changed, neighbours)
     count = len(layer.features)
     features = [dict(f) for f in layer.features]
@@ -451,7 +452,7 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
             if len(members) >= 2 and any(m >= count for m in members):
                 relations.append(dict(r, features=members))
     _snap_directions(layer, features, count)
-    _refit_inside(V, F, labels, features, count, _grow(F, changed, 1))
+    _refit_inside(V, F, labels, features, count, near)
     relations += _semi_defined(layer, V, F, labels, features, count, neighbours)
     _dissolve_folded(V, F, labels, features, count, neighbours)
     return _assemble(layer, mesh, labels, changed, features, relations, adjacency_before, sub_adjacency)

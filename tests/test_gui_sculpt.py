@@ -10,7 +10,7 @@ import pytest
 
 import test_gui as gui
 
-DRIVER = gui.HELPERS + r'''
+DRIVER = gui.HELPERS + gui.gui_driver.MOUSE + r'''
 
 
 def mesh_state(layer):
@@ -54,17 +54,8 @@ def run():
     undo_before = len(doc.UndoNames)
 
     # A drag from (22, 20) to (38, 20) on the top face, as the mouse would make it.
-    widget = view.graphicsView().viewport()
-    def screen(x, y):
-        sx, sy = view.getPointOnScreen(App.Vector(x, y, 20))
-        return QtCore.QPoint(int(sx), int(widget.height() - sy))
-    def send(kind, point, buttons):
-        event = QtGui.QMouseEvent(kind, point, widget.mapToGlobal(point), QtCore.Qt.LeftButton
-                                  if kind != QtCore.QEvent.MouseMove else QtCore.Qt.NoButton,
-                                  buttons, QtCore.Qt.NoModifier)
-        QtGui.QApplication.sendEvent(widget, event)
-        QtGui.QApplication.processEvents()
-    path = [screen(22 + 16 * t / 10, 20) for t in range(11)]
+    screen, send = mouse_events(view)
+    path = [screen((22 + 16 * t / 10, 20, 20)) for t in range(11)]
     send(QtCore.QEvent.MouseMove, path[0], QtCore.Qt.NoButton)
     result["circle_shown"] = panel.circle.shown
     send(QtCore.QEvent.MouseButtonPress, path[0], QtCore.Qt.LeftButton)
