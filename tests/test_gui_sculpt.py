@@ -77,6 +77,21 @@ def run():
     result["sculpted"].update({"undo_steps": len(doc.UndoNames) - undo_before,
                                "undo_name": doc.UndoNames[0] if doc.UndoNames else None,
                                "status": form.status.text(), "edits": len(json.loads(layer.Edits or "[]"))})
+    # Undone with the panel open, then the same drag again: it starts from the layer as it is now,
+    # so the layer holds that one stroke, not the undone one as well.
+    doc.undo()
+    doc.recompute()
+    for kind, point in ([QtCore.QEvent.MouseButtonPress, path[0]],
+                        *[[QtCore.QEvent.MouseMove, p] for p in path[1:]],
+                        [QtCore.QEvent.MouseButtonRelease, path[-1]]):
+        send(kind, point, QtCore.Qt.NoButton if kind == QtCore.QEvent.MouseButtonRelease else QtCore.Qt.LeftButton)
+    for _ in range(600):
+        if not panel.busy:
+            break
+        wait(0.05)
+    wait(0.3)
+    result["again"] = mesh_state(layer)
+    result["again"]["edits"] = len(json.loads(layer.Edits or "[]"))
     close = [b for b in Gui.getMainWindow().findChildren(QtGui.QPushButton) if b.text().replace("&", "") == "Close"
              and b.isVisible()]
     result["close_buttons"] = len(close)
@@ -111,6 +126,12 @@ def test_a_drag_on_the_view_sculpts_the_layer_in_one_undo_step(sculpt_run):
     assert sculpted["undo_steps"] == 1 and sculpted["undo_name"] == "Sculpt stroke" and sculpted["edits"] == 1
     # It was computed in the worker: nothing stored at the release, one step once it was ready.
     assert sculpt_run["busy_after_release"] and sculpt_run["undo_steps_while_busy"] == 0
+
+
+def test_a_stroke_after_an_undo_starts_from_the_layer_as_it_is(sculpt_run):
+    again, sculpted = sculpt_run["again"], sculpt_run["sculpted"]
+    assert again["edits"] == 1
+    assert again["facets"] == sculpted["facets"] and again["top"] == pytest.approx(sculpted["top"])
 
 
 def test_undo_restores_the_mesh_and_the_layer_and_close_leaves(sculpt_run):

@@ -105,6 +105,7 @@ class SculptPanel:
         self.job = None       # the worker's (thread, step, the layer's Edits when it started, outcome)
         self.timer = None
         self.source = None    # the source mesh, read once
+        self.layer_edits = getattr(obj, "Edits", "")  # the object's Edits that self.layer has
         self.callbacks = [
             (coin.SoMouseButtonEvent.getClassTypeId(), self.view.addEventCallbackPivy(
                 coin.SoMouseButtonEvent.getClassTypeId(), self.on_button)),
@@ -201,6 +202,8 @@ class SculptPanel:
         step, outcome = self.queue.pop(0), {}
         if self.source is None:
             self.source = layer_object.source_mesh(self.obj)  # it does not change while sculpting
+        if getattr(self.obj, "Edits", "") != self.layer_edits:  # undone or redone meanwhile
+            self.layer, self.layer_edits = layer_object.feature_layer(self.obj), getattr(self.obj, "Edits", "")
         # Read here: the document belongs to this thread.
         inputs = layer_object.edit_inputs(self.obj, self.layer, self.source)
 
@@ -239,7 +242,7 @@ class SculptPanel:
             edited = outcome["record"] if getattr(self.obj, "Edits", "") == edits else None
             done = apply_in_one_step(self.obj, step, "Sculpt stroke", edited)
             if done is not None:
-                self.layer = done[0]
+                self.layer, self.layer_edits = done[0], getattr(self.obj, "Edits", "")
                 self.strokes_applied += 1
                 new = sum(1 for f in self.layer.features if f["triangles"])
                 self.form.status.setText("%d strokes; the layer has %d features." % (self.strokes_applied, new))
