@@ -31,6 +31,7 @@ import numpy as np
 from . import _native as native
 from .features import FeatureLayer, as_feature_layer, idealize
 from .mesh import Mesh
+from .segmentation import segment
 
 # Rings of faces around the modified ones that are idealized with them: one ring gives each
 # region feature the faces across its border, a second lets the segmentation see the curvature
@@ -425,7 +426,13 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
         used = np.unique(F[region])
         index = np.full(len(V), -1, dtype=np.int64)
         index[used] = np.arange(len(used))
-        sub = idealize(Mesh(V[used], index[F[region]]), distance_tolerance=layer.distance_tolerance,
+        region_mesh = Mesh(V[used], index[F[region]])
+        # Segmented as densely as the whole part would be (a small region alone would be refined to
+        # a whole part's minimum sampling): its share of the part's surface.
+        part_area = sum(f.get("area", 0.0) for f in layer.features)
+        share = min(1.0, float(region_mesh.triangle_areas().sum()) / part_area) if part_area > 0 else 1.0
+        sub = idealize(region_mesh, segment(region_mesh, part_share=max(share, 1e-9)),
+                       distance_tolerance=layer.distance_tolerance,
                        angle_tolerance=layer.angle_tolerance or 10.0, measured=True)
         sub_labels = np.asarray(sub.labels)
         region_faces = np.flatnonzero(region)
@@ -455,28 +462,27 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
     _refit_inside(V, F, labels, features, count, near)
     relations += _semi_defined(layer, V, F, labels, features, count, neighbours)
     _dissolve_folded(V, F, labels, features, count, neighbours)
-    return _assemble(layer, mesh, labels, changed, features, relations, adjacency_before, sub_adjacency)
+    return _assemble(layer, mesh, labels, changed, features, relations, adjacency_before, sub_adjacency, near)
 
 
-def _assemble(layer, mesh, labels, changed, features, relations, adjacency_before, sub_adjacency):
+def _assemble(layer, mesh, labels, changed, features, relations, adjacency_before, sub_adjacency, near):
     V, F = mesh.vertices, mesh.faces
+    labels = labels.astype(np.int32)
+    tables = native.feature_tables(V, F, labels, len(features))
+    pairs = tables["vertex_features"]  # (vertex, feature), by feature
+    on_features = np.bincount(pairs[:, 0], minlength=len(V))
     # Vertices of changed faces on one feature only go onto its surface; those that unchanged faces
-    # share stay, and so do those on several features' borders.
-    fixed = np.zeros(len(V), dtype=bool)
-    fixed[F[~changed].ravel()] = True
+    # share stay, and so do those on several features' borders. The unchanged faces that share a
+    # vertex with a changed one are in `near`, the changed faces' ring.
+    movable = np.zeros(len(V), dtype=bool)
+    movable[F[changed].ravel()] = True
+    movable[F[near & ~changed].ravel()] = False
+    movable &= on_features == 1
     idealized = V.copy()
     deviation = np.full(len(V), np.nan)
-    # How many features each vertex's faces have, and whether a changed face has it.
-    width = len(features) + 1  # (vertex, label) pairs as one key each: a 1-d unique is fast
-    keys = np.unique(F.ravel().astype(np.int64) * width + (np.repeat(labels, 3) + 1))
-    pairs = np.stack([keys // width, keys % width - 1], axis=1)
-    pairs = pairs[pairs[:, 1] >= 0]
-    on_features = np.bincount(pairs[:, 0], minlength=len(V))
-    in_changed = np.zeros(len(V), dtype=bool)
-    in_changed[F[changed].ravel()] = True
-    movable = (on_features == 1) & in_changed & ~fixed
+    bounds = np.searchsorted(pairs[:, 1], np.arange(len(features) + 1))
     for f in features:
-        vertices = pairs[pairs[:, 1] == f["id"], 0]
+        vertices = pairs[bounds[f["id"]]:bounds[f["id"] + 1], 0]
         if len(vertices) == 0 or f["type"] == "freeform":
             continue
         closest, distance = native.onto_surface(f["type"], f["params"], np.ascontiguousarray(V[vertices], float))
@@ -485,30 +491,15 @@ def _assemble(layer, mesh, labels, changed, features, relations, adjacency_befor
         idealized[vertices[move]] = closest[move]
         deviation[vertices[move]] = 0.0
     # The graph from the faces now: the layer's edges where they remain, the region's new ones.
-    edges = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1).astype(np.int64)
-    edge_keys = edges[:, 0] * len(V) + edges[:, 1]
-    owner = np.tile(labels, 3)
-    order = np.argsort(edge_keys, kind="stable")
-    edge_keys, owner = edge_keys[order], owner[order]
-    same = edge_keys[1:] == edge_keys[:-1]
-    a, b = owner[:-1][same], owner[1:][same]
-    keep = (a != b) & (a >= 0) & (b >= 0)
-    low, high = np.minimum(a[keep], b[keep]), np.maximum(a[keep], b[keep])
-    pairs = [tuple(p) for p in np.unique(np.stack([low, high], axis=1), axis=0).tolist()] if keep.any() else []
     adjacency = [adjacency_before.get(p) or dict(sub_adjacency.get(p, {"continuity": "G0", "angle": 0.0, "length": 0.0}),
-                                                  a=p[0], b=p[1]) for p in sorted(pairs)]
+                                                  a=p[0], b=p[1]) for p in map(tuple, tables["adjacent"].tolist())]
     present = {f["id"] for f in features}
     relations = [r for r in relations if all(m in present for m in r["features"])]
-    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    areas = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    valid = labels >= 0
-    area = np.bincount(labels[valid], weights=areas[valid], minlength=len(features))
-    triangles = np.bincount(labels[valid], minlength=len(features))
     for f in features:
-        f["area"], f["triangles"] = float(area[f["id"]]), int(triangles[f["id"]])
+        f["area"], f["triangles"] = float(tables["area"][f["id"]]), int(tables["triangles"][f["id"]])
     finite = deviation[np.isfinite(deviation)]
     result = {
-        "labels": labels.astype(np.int32), "features": features, "adjacency": adjacency, "relations": relations,
+        "labels": labels, "features": features, "adjacency": adjacency, "relations": relations,
         "idealized_vertices": idealized, "vertex_deviation": deviation,
         "max_deviation": float(finite.max()) if finite.size else 0.0,
         "rms_deviation": float(np.sqrt(np.mean(finite ** 2))) if finite.size else 0.0,

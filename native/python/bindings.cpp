@@ -7,6 +7,7 @@
 #include "fit/bspline_fitting.h"
 #include "curvature/curvature.h"
 #include "features/feature_layer.h"
+#include "features/feature_tables.h"
 #include "core/mesh.h"
 #include "io/mesh_io.h"
 #include "core/progress.h"
@@ -231,10 +232,13 @@ PYBIND11_MODULE(_native, m) {
   m.def(
       "segment",
       [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F, Progress* progress,
-         bool self_intersections) {
+         bool self_intersections, double part_share) {
         const TriangleMesh mesh = mesh_from(V, F);
+        if (!(part_share > 0.0 && part_share <= 1.0))
+          throw std::invalid_argument("part_share is the mesh's share of the part's surface, in (0, 1]");
         SegmentationOptions options;
         options.progress = progress;
+        options.refinement.part_share = part_share;
         if (self_intersections) options.check.self_intersections = count_self_intersections;
         Segmentation s;
         {
@@ -244,8 +248,10 @@ PYBIND11_MODULE(_native, m) {
         return segmentation_dict(std::move(s));
       },
       py::arg("V"), py::arg("F"), py::kw_only(), py::arg("progress") = nullptr, py::arg("self_intersections") = false,
+      py::arg("part_share") = 1.0,
       "Two-pass mean-curvature-histogram segmentation; with self_intersections, the mesh check counts "
-      "intersecting triangle pairs (CGAL; about 1.2 us per triangle).");
+      "intersecting triangle pairs (CGAL; about 1.2 us per triangle); part_share: the mesh's share of "
+      "the whole part's surface (RefinementOptions::part_share).");
 
   m.def(
       "identify_features",
@@ -280,6 +286,34 @@ PYBIND11_MODULE(_native, m) {
       py::arg("measured") = FeatureOptions{}.measured,
       "Feature identification, graph and projection (thesis ch. 4); options as FeatureOptions "
       "(distance_tolerance 0: 0.1 % of the bounding-box diagonal).");
+
+  m.def(
+      "feature_tables",
+      [](const Eigen::Ref<const MatrixX3d>& V, const Eigen::Ref<const MatrixX3i>& F,
+         const Eigen::Ref<const VectorXi32>& labels, int num_features) {
+        const TriangleMesh mesh = mesh_from(V, F);
+        const std::vector<int> face_labels(labels.data(), labels.data() + labels.size());
+        FeatureTables t;
+        {
+          py::gil_scoped_release release;
+          t = feature_tables(mesh, face_labels, num_features);
+        }
+        using Pairs = Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor>;
+        Pairs vertex_features(t.vertex_features.size(), 2), adjacent(t.adjacent.size(), 2);
+        for (size_t k = 0; k < t.vertex_features.size(); ++k)
+          vertex_features.row(k) << t.vertex_features[k][0], t.vertex_features[k][1];
+        for (size_t k = 0; k < t.adjacent.size(); ++k) adjacent.row(k) << t.adjacent[k].first, t.adjacent[k].second;
+        py::dict d;
+        d["vertex_features"] = vertex_features;
+        d["adjacent"] = adjacent;
+        d["area"] = Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(t.area.data(), static_cast<Eigen::Index>(t.area.size())));
+        d["triangles"] = to_array(t.triangles);
+        return d;
+      },
+      py::arg("V"), py::arg("F"), py::arg("labels"), py::arg("num_features"),
+      "The tables of a labelled mesh (labels int32 #F, -1 for none): vertex_features (M, 2) the "
+      "distinct (vertex, feature) pairs by feature then vertex, adjacent (K, 2) the features sharing "
+      "an edge (a < b, sorted), area and triangles per feature.");
 
   m.def(
       "surface_colors",

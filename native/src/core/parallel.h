@@ -73,8 +73,15 @@ void on_two_threads_as_free(int count, const Work& work, const ProgressSpan& pro
 }
 
 // for_each_polled (progress.h) on two threads: blocks of `block` items in turn.
+// One block or fewer runs here only: the second thread would have nothing to do, and starting one
+// costs more than a small mesh's pass (measured: a 4,000-face region's denoising, 68 passes).
 template <class Body>
 void for_each_polled_on_two_threads(int count, const ProgressSpan& progress, const Body& body, int block = 1 << 14) {
+  if (count <= block) {
+    progress.step(0.0);
+    for (int i = 0; i < count; ++i) body(i);
+    return;
+  }
   on_two_threads([&](size_t first) {
     for (int begin = static_cast<int>(first) * block; begin < count; begin += 2 * block) {
       if (first == 0) progress.step(static_cast<double>(begin) / count);

@@ -261,7 +261,7 @@ RefinedMesh refine_long_triangles(const TriangleMesh& mesh, const MeshTopology& 
   const auto even_edge = [&](double triangles) { return std::sqrt(area / (kEquilateralArea * triangles)); };
   double target = options.target_edge_length;
   if (target <= 0.0) {
-    const double coarsest = even_edge(options.min_samples);
+    const double coarsest = even_edge(options.min_samples * std::clamp(options.part_share, 1e-9, 1.0));
     const double median = median_edge_length(mesh, topology);
     // The even sampling's edge with the input's triangle count. A remesher's or a scanner's edges
     // are about that long (measured on the benchmark's remeshed and marching-cubes meshes: 0.88 to

@@ -21,6 +21,10 @@ struct RefinementOptions {
   int min_samples = 20000;        // the thesis's meshes had 60–75k triangles; a third of that resolves
                                   // every feature wider than a few triangles
   int max_triangles = 2000000;    // memory bound for the refined mesh
+  // The share of a whole part's surface that the mesh is: `min_samples` counts for the whole part,
+  // and a region of it re-idealized alone is sampled as densely as the part would be (1: the mesh is
+  // the whole part).
+  double part_share = 1.0;
   // Splitting stops at this many times the triangles that an even sampling of the surface at the
   // target edge length needs (or the input's count if larger): a fan of slivers that no split can
   // mend multiplies instead (a degenerate input of a few needles reached 1.6 million faces). Of the
