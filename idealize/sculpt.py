@@ -87,6 +87,17 @@ def _points(array, name):
     return array
 
 
+def _stroke_points(points, directions, empty=False):
+    points = _points(points, "points")
+    directions = np.zeros((0, 3)) if directions is None else _points(directions, "directions")
+    if len(points) == 0 and not empty:
+        raise ValueError("a stroke needs at least one point")
+    if len(directions) not in (0, len(points)):
+        raise ValueError("one view direction per stroke point (%d points, %d directions)"
+                         % (len(points), len(directions)))
+    return points, directions
+
+
 class Sculptor:
     """A mesh (or a feature layer's idealized mesh) being sculpted stroke by stroke. The input is
     never modified. Faces carry the feature label of the face they came from; ``modified()`` says
@@ -110,26 +121,57 @@ class Sculptor:
                                            np.ascontiguousarray(faces, dtype=np.int32), labels)
             self.repaired = True
         self._snapshot = None
+        self._open = None  # the native stroke under way (begin ... end)
 
     def stroke(self, brush, points, directions=None, radius=1.0, strength=0.5, spacing=0.2, target_edge_length=0.0,
                dynamic_topology=True):
         """Applies `brush` along the stroke `points` (S x 3) seen along `directions` (S x 3, or
         None: from every side). `radius` in the mesh's units (> 0); `strength` per unit of stroke
         length (see the module's doc); `target_edge_length` 0 keeps the resolution under the first
-        point. Returns dict(dabs, moved_vertices, target_edge_length)."""
+        point. Returns dict(dabs, moved_vertices, target_edge_length). The same as begin() at the
+        first point, extend() through the others, end()."""
+        points, directions = _stroke_points(points, directions)
+        self.begin(brush, points[0], None if len(directions) == 0 else directions[0], radius=radius,
+                   strength=strength, spacing=spacing, target_edge_length=target_edge_length,
+                   dynamic_topology=dynamic_topology)
+        self.extend(points[1:], None if len(directions) == 0 else directions[1:])
+        return self.end()
+
+    def begin(self, brush, point, direction=None, radius=1.0, strength=0.5, spacing=0.2, target_edge_length=0.0,
+              dynamic_topology=True):
+        """Starts a stroke at `point` (3,) seen along `direction` (3,; None: from every side), with
+        its first dab; the arguments as stroke()'s. For sculpting as the pointer moves: extend()
+        with each new point, end() on release. The dabs are those of stroke() with all the points."""
         if brush not in BRUSHES:
             raise ValueError("unknown brush %r: %s" % (brush, ", ".join(BRUSHES)))
-        points = _points(points, "points")
-        directions = np.zeros((0, 3)) if directions is None else _points(directions, "directions")
-        if len(points) == 0:
-            raise ValueError("a stroke needs at least one point")
-        if len(directions) not in (0, len(points)):
-            raise ValueError("one view direction per stroke point (%d points, %d directions)"
-                             % (len(points), len(directions)))
+        if self._open is not None:
+            raise RuntimeError("a stroke is under way: end() it first")
+        point = _points(point, "points")
+        if len(point) != 1:
+            raise ValueError("a stroke begins at one point")
+        direction = np.zeros(3) if direction is None else _points(direction, "directions")[0]
         self._snapshot = None
-        return dict(self._native.stroke(brush, points, directions, radius=float(radius), strength=float(strength),
-                                        spacing=float(spacing), target_edge_length=float(target_edge_length),
-                                        dynamic_topology=bool(dynamic_topology)))
+        self._open = native.Stroke(self._native, brush, point[0], direction, radius=float(radius),
+                                   strength=float(strength), spacing=float(spacing),
+                                   target_edge_length=float(target_edge_length),
+                                   dynamic_topology=bool(dynamic_topology))
+
+    def extend(self, points, directions=None):
+        """Continues the stroke under way through `points` (S x 3) seen along `directions` (S x 3,
+        or None: from every side): the dabs on the way."""
+        if self._open is None:
+            raise RuntimeError("no stroke is under way: begin() one first")
+        points, directions = _stroke_points(points, directions, empty=True)
+        self._snapshot = None
+        self._open.extend(points, directions)
+
+    def end(self):
+        """Ends the stroke under way. Returns dict(dabs, moved_vertices, target_edge_length)."""
+        if self._open is None:
+            raise RuntimeError("no stroke is under way")
+        stroke, self._open = self._open, None
+        self._snapshot = None
+        return dict(stroke.finish())
 
     def _state(self):
         if self._snapshot is None:

@@ -1,8 +1,8 @@
 """GUI test of sculpt mode (issue 53) in the real FreeCAD window under xvfb-run: a block is
 idealized; Sculpt opens its panel; a drag across the top face, made of synthetic mouse events on the
-3D view, raises a bump there with the draw brush in one undo step, computed in a worker thread; the
-layer is re-idealized (new features, the old ones unchanged) and its mesh changed; undo restores
-both, and Close leaves the mode.
+3D view, raises a bump there with the draw brush as the pointer moves (a preview in place of the
+layer), in one undo step, computed in a worker thread; the layer is re-idealized (new features, the
+old ones unchanged) and its mesh changed; undo restores both, and Close leaves the mode.
 """
 import json
 
@@ -63,6 +63,11 @@ def run():
     for point in path[1:]:
         send(QtCore.QEvent.MouseMove, point, QtCore.Qt.LeftButton)
     result["points"] = len(panel.stroke[0]) if panel.stroke else 0
+    # The clay moved under the pointer, before the release: the preview in place of the layer.
+    panel.refresh()
+    live = panel.preview.coordinates.point.getValues() if panel.preview.shown else []
+    result["live"] = {"shown": panel.preview.shown, "layer_hidden": not layer.ViewObject.Visibility,
+                      "top": max((p[2] for p in live), default=0.0)}
     send(QtCore.QEvent.MouseButtonRelease, path[-1], QtCore.Qt.NoButton)
     QtGui.QApplication.processEvents()
     # The stroke is sculpted and re-idealized in a worker thread: the GUI goes on meanwhile.
@@ -73,6 +78,7 @@ def run():
             break
         wait(0.05)
     wait(0.3)
+    result["preview_after"] = panel.preview.shown and not layer.ViewObject.Visibility
     result["sculpted"] = mesh_state(layer)
     result["sculpted"].update({"undo_steps": len(doc.UndoNames) - undo_before,
                                "undo_name": doc.UndoNames[0] if doc.UndoNames else None,
@@ -128,10 +134,23 @@ def test_a_drag_on_the_view_sculpts_the_layer_in_one_undo_step(sculpt_run):
     assert sculpt_run["busy_after_release"] and sculpt_run["undo_steps_while_busy"] == 0
 
 
+def test_the_clay_moves_under_the_pointer_and_the_layer_is_shown_again_once_stored(sculpt_run):
+    live, before, sculpted = sculpt_run["live"], sculpt_run["before"], sculpt_run["sculpted"]
+    assert live["shown"] and live["layer_hidden"]
+    assert live["top"] > before["top"] + 0.5  # raised while the button was still down
+    assert not sculpt_run["preview_after"]  # the stored, re-idealized layer is what shows
+    assert sculpted["top"] == pytest.approx(live["top"], abs=0.5)  # the stored stroke is the one seen
+
+
 def test_a_stroke_after_an_undo_starts_from_the_layer_as_it_is(sculpt_run):
-    again, sculpted = sculpt_run["again"], sculpt_run["sculpted"]
+    # The same drag again: one bump, not the undone one's raised once more. (Not the same mesh to
+    # the bit: the drag's points are picked on the clay as it shows, which moves as the preview
+    # is drawn.)
+    again, sculpted, before = sculpt_run["again"], sculpt_run["sculpted"], sculpt_run["before"]
     assert again["edits"] == 1
-    assert again["facets"] == sculpted["facets"] and again["top"] == pytest.approx(sculpted["top"])
+    raised = sculpted["top"] - before["top"]
+    assert 0.5 * raised < again["top"] - before["top"] < 1.5 * raised
+    assert again["facets"] == pytest.approx(sculpted["facets"], rel=0.1)
 
 
 def test_undo_restores_the_mesh_and_the_layer_and_close_leaves(sculpt_run):
@@ -139,4 +158,5 @@ def test_undo_restores_the_mesh_and_the_layer_and_close_leaves(sculpt_run):
     assert sculpt_run["closed"]
     assert undone["facets"] == before["facets"] and undone["top"] == pytest.approx(before["top"])
     assert undone["all_features"] == before["all_features"]
-    assert redone["facets"] == sculpted["facets"] and redone["top"] == pytest.approx(sculpted["top"])
+    again = sculpt_run["again"]
+    assert redone["facets"] == again["facets"] and redone["top"] == pytest.approx(again["top"])

@@ -136,6 +136,41 @@ def test_the_same_strokes_give_the_same_mesh(sphere):
         assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
 
 
+def test_a_stroke_dab_by_dab_as_the_pointer_moves_is_the_stroke_at_once(sphere):
+    # The 3D view sculpts while the pointer moves; the document replays the stroke at once: both
+    # must make the same mesh, to the bit, for every brush (a grab included).
+    points, directions = stroke_over([0, 0.2, 1], [0.5, 0.2, 1], n=9)
+    for brush in sculpt.BRUSHES:
+        at_once = sculpt.Sculptor(sphere)
+        report = at_once.stroke(brush, points, directions, radius=2.5, strength=0.6)
+        live = sculpt.Sculptor(sphere)
+        live.begin(brush, points[0], directions[0], radius=2.5, strength=0.6)
+        seen = [live.mesh().vertices.copy()]
+        for point, direction in zip(points[1:], directions[1:]):
+            live.extend([point], [direction])
+            seen.append(live.mesh().vertices.copy())
+        assert live.end() == report
+        a, b = at_once.mesh(), live.mesh()
+        assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces), brush
+        assert np.array_equal(at_once.modified(), live.modified()) and np.array_equal(at_once.labels(), live.labels())
+        # The mesh changed as the pointer moved, not only at the end.
+        assert not np.array_equal(seen[0], sphere.vertices) or brush == "grab"
+        assert sum(not np.array_equal(x, y) for x, y in zip(seen, seen[1:])) >= len(points) // 2, brush
+
+
+def test_a_stroke_under_way_must_end_before_another_begins(sphere):
+    sculptor = sculpt.Sculptor(sphere)
+    with pytest.raises(RuntimeError, match="no stroke is under way"):
+        sculptor.extend([[0, 0, RADIUS]])
+    sculptor.begin("draw", [0, 0, RADIUS], [0, 0, -1], radius=2.0)
+    with pytest.raises(RuntimeError, match="end"):
+        sculptor.begin("draw", [0, 0, RADIUS], [0, 0, -1], radius=2.0)
+    sculptor.extend([[0.5, 0, RADIUS]], [[0, 0, -1]])
+    assert sculptor.end()["dabs"] >= 2
+    with pytest.raises(RuntimeError, match="no stroke is under way"):
+        sculptor.end()
+
+
 def test_bad_input_is_refused_with_a_message(sphere):
     points, directions = stroke_over([0, 0, 1], [0.1, 0, 1])
     with pytest.raises(ValueError, match="unknown brush"):

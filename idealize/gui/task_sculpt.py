@@ -1,13 +1,20 @@
 """Sculpt mode (Resources/ui/Sculpt.ui; issue 53): drags with the left mouse button on a feature
 layer in the 3D view apply the chosen brush (idealize.sculpt) along the stroke, seen from the view's
-direction; a circle under the pointer shows the brush. Each stroke is one undo step: the layer's
-sculpt edit, re-idealized (idealize.reidealize), and the solids made from its source regenerated.
-The sculpting and re-idealization of a stroke, and the preparation of what the layer object stores,
-run in a worker thread (the core API is free of FreeCAD, and its native parts release the
-interpreter), so the view stays interactive; strokes made meanwhile wait their turn, and each is
-stored, in the GUI's thread, when its result is ready.
-With re-idealization after each stroke turned off, the strokes are previewed and applied together,
-as one step, when the panel closes. Close or Esc leaves the mode.
+direction; a circle under the pointer shows the brush.
+
+The clay moves under the pointer: the panel keeps a Sculptor, each mouse move adds the stroke's
+dabs up to the new point, and a preview draws the mesh as it is (faces not re-idealized yet in the
+freeform grey) in place of the layer.
+
+Each stroke is one undo step: the layer's sculpt edit, re-idealized (idealize.reidealize), and the
+solids made from its source regenerated. The stroke's replay, its re-idealization and the
+preparation of what the layer object stores run in a worker thread (the core API is free of
+FreeCAD, and its native parts release the interpreter), so the view stays interactive; strokes made
+meanwhile wait their turn, and each is stored, in the GUI's thread, when its result is ready. The
+replay makes the same dabs as the drag did (idealize.sculpt.Sculptor.begin), so the stored stroke is
+the one seen. Once every stroke is stored, the layer is shown again, re-idealized.
+With re-idealization after each stroke turned off, the strokes are applied together, as one step,
+when the panel closes. Close or Esc leaves the mode.
 """
 import math
 import os
@@ -18,12 +25,16 @@ import numpy as np
 
 from .. import sculpt
 from ..freecad import layer_object
+from ..freecad.mesh import SURFACE_COLORS, type_colors
 from .task_push_pull import Preview, apply_in_one_step
 
 UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                        "Resources", "ui", "Sculpt.ui")
 CIRCLE_SEGMENTS = 48  # the brush circle's polygon: smooth at any size on screen
 POLL_MS = 30  # how often the GUI looks for a finished stroke: well below what a user notices
+# The preview of the clay under the pointer is drawn again at most this often: drawing a 100k-triangle
+# mesh takes about 50 ms, and a drag's moves come every 10-20 ms (a refresh per move would queue them).
+REFRESH_MS = 60
 
 #: The panel open now (None when none is): for macros and tests.
 active_panel = None
@@ -106,6 +117,10 @@ class SculptPanel:
         self.timer = None
         self.source = None    # the source mesh, read once
         self.layer_edits = getattr(obj, "Edits", "")  # the object's Edits that self.layer has
+        self.sculptor = None  # the clay under the pointer: a Sculptor of sculptor_layer
+        self.sculptor_layer = None
+        self.sculptor_stale = True  # the layer has changed since: start again from it when idle
+        self.refresh_timer = None
         self.callbacks = [
             (coin.SoMouseButtonEvent.getClassTypeId(), self.view.addEventCallbackPivy(
                 coin.SoMouseButtonEvent.getClassTypeId(), self.on_button)),
@@ -125,7 +140,10 @@ class SculptPanel:
 
     # The view's events.
     def pick(self, position):
-        """The point of the layer under the screen position, or None."""
+        """The point of the layer (or of the preview drawn in its place) under the screen position,
+        or None."""
+        if self.preview.shown:
+            return self.preview.pick(position)
         info = self.view.getObjectInfo((int(position[0]), int(position[1])))
         if not info or info.get("Object") != self.obj.Name:
             return None
@@ -146,6 +164,9 @@ class SculptPanel:
             self.stroke[0].append(point.tolist())
             self.stroke[1].append(self.direction().tolist())
             callback.setHandled()
+            if self.sculptor is not None:
+                self.sculptor.extend([point], [self.direction()])
+                self.schedule_refresh()
 
     def on_button(self, callback):
         from pivy import coin
@@ -158,6 +179,7 @@ class SculptPanel:
                 return  # off the mesh: the view turns as usual
             self.stroke = ([point.tolist()], [self.direction().tolist()])
             callback.setHandled()
+            self.begin_live(point, self.direction())
         elif self.stroke is not None:
             callback.setHandled()
             self.end_stroke()
@@ -167,7 +189,56 @@ class SculptPanel:
             return
         points, directions = self.stroke
         self.stroke = None
+        if self.sculptor is not None:
+            self.sculptor.end()
+            self.refresh()
         self.finish(points, directions)
+
+    # The clay under the pointer.
+    def begin_live(self, point, direction):
+        """Starts the stroke's dabs on the panel's Sculptor: from the layer as it is stored when
+        nothing is waiting to be stored (after an undo too), else on from the strokes before."""
+        if getattr(self.obj, "Edits", "") != self.layer_edits and not self.busy and not self.pending:
+            self.layer, self.layer_edits = layer_object.feature_layer(self.obj), getattr(self.obj, "Edits", "")
+            self.sculptor_stale = True
+        try:
+            if self.sculptor is None or (self.sculptor_stale and not self.busy and not self.pending):
+                self.sculptor, self.sculptor_layer = sculpt.Sculptor(self.layer), self.layer
+                self.sculptor_stale = False
+            step = self.stroke_step([point.tolist()], [direction.tolist()])
+            self.sculptor.begin(step["brush"], point, direction, radius=step["radius"], strength=step["strength"])
+        except Exception as error:  # the stroke is still stored (and replayed) on release: said there
+            self.sculptor = None
+            self.form.status.setText("Cannot sculpt here: %s" % error)
+            return
+        self.refresh()
+
+    def schedule_refresh(self):
+        from PySide import QtCore
+        if self.refresh_timer is None:
+            self.refresh_timer = QtCore.QTimer()
+            self.refresh_timer.setSingleShot(True)
+            self.refresh_timer.timeout.connect(self.refresh)
+        if not self.refresh_timer.isActive():
+            self.refresh_timer.start(REFRESH_MS)
+
+    def refresh(self):
+        """Draws the Sculptor's mesh in place of the layer: faces carry their feature's colour, those
+        sculpted and not re-idealized yet the freeform grey."""
+        if self.refresh_timer is not None:
+            self.refresh_timer.stop()
+        if self.sculptor is None:
+            return
+        mesh = self.sculptor.mesh()
+        colors = type_colors(self.sculptor_layer.features, self.sculptor.labels())
+        colors[self.sculptor.modified()] = SURFACE_COLORS["freeform"]
+        self.preview.show_mesh(mesh.vertices, mesh.faces, colors)
+
+    def show_stored(self):
+        """Once every stroke is stored and none is under way: the layer again, re-idealized."""
+        if not self.busy and self.stroke is None and not self.pending:
+            self.preview.hide()
+            self.sculptor_stale = True
 
     # Strokes.
     def stroke_step(self, points, directions):
@@ -178,12 +249,7 @@ class SculptPanel:
         one = self.stroke_step(points, directions)
         if not self.form.reidealize.isChecked():
             self.pending.append(one)
-            try:
-                self.preview.show(sculpt.sculpt(self.layer, self.pending))
-                self.form.status.setText("%d strokes waiting: re-idealized when the panel closes." % len(self.pending))
-            except Exception as error:  # a stroke that fails is dropped, and said so
-                self.pending.pop()
-                self.form.status.setText("Cannot apply: %s" % error)
+            self.form.status.setText("%d strokes waiting: re-idealized when the panel closes." % len(self.pending))
             return
         self.queue.append({"op": "sculpt", "strokes": [one]})
         self.start_next()
@@ -246,7 +312,9 @@ class SculptPanel:
                 self.strokes_applied += 1
                 new = sum(1 for f in self.layer.features if f["triangles"])
                 self.form.status.setText("%d strokes; the layer has %d features." % (self.strokes_applied, new))
+        self.sculptor_stale = True
         self.start_next()
+        self.show_stored()
 
     # Leaving.
     def close(self):
@@ -256,6 +324,10 @@ class SculptPanel:
         self.callbacks = []
         self.viewport.removeEventFilter(self.release_filter)
         self.circle.hide()
+        if self.stroke is not None:  # a drag under way when the panel closes: stored as it is
+            self.end_stroke()
+        if self.refresh_timer is not None:
+            self.refresh_timer.stop()
         self.preview.hide()
         while self.busy:  # the strokes made are all stored
             self.poll(wait=True)

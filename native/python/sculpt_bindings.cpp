@@ -19,6 +19,25 @@ namespace py = pybind11;
 namespace {
 
 
+StrokeOptions stroke_options(double radius, double strength, double spacing, double target_edge_length,
+                             bool dynamic_topology) {
+  StrokeOptions options;
+  options.radius = radius;
+  options.strength = strength;
+  options.spacing = spacing;
+  options.target_edge_length = target_edge_length;
+  options.dynamic_topology = dynamic_topology;
+  return options;
+}
+
+py::dict report_dict(const StrokeReport& report) {
+  py::dict out;
+  out["dabs"] = report.dabs;
+  out["moved_vertices"] = report.moved_vertices;
+  out["target_edge_length"] = report.target_edge_length;
+  return out;
+}
+
 }  // namespace
 
 void bind_sculpt(py::module_& m) {
@@ -36,12 +55,8 @@ void bind_sculpt(py::module_& m) {
           [](SculptMesh& mesh, const std::string& brush, const Eigen::Ref<const RowMatrixX3d>& points,
              const Eigen::Ref<const RowMatrixX3d>& directions, double radius, double strength, double spacing,
              double target_edge_length, bool dynamic_topology) {
-            StrokeOptions options;
-            options.radius = radius;
-            options.strength = strength;
-            options.spacing = spacing;
-            options.target_edge_length = target_edge_length;
-            options.dynamic_topology = dynamic_topology;
+            const StrokeOptions options =
+                stroke_options(radius, strength, spacing, target_edge_length, dynamic_topology);
             const Brush b = brush_named(brush);
             const MatrixX3d p = points, d = directions;
             StrokeReport report;
@@ -49,11 +64,7 @@ void bind_sculpt(py::module_& m) {
               py::gil_scoped_release release;
               report = sculpt_stroke(mesh, b, p, d, options);
             }
-            py::dict out;
-            out["dabs"] = report.dabs;
-            out["moved_vertices"] = report.moved_vertices;
-            out["target_edge_length"] = report.target_edge_length;
-            return out;
+            return report_dict(report);
           },
           py::arg("brush"), py::arg("points"), py::arg("directions"), py::kw_only(), py::arg("radius"),
           py::arg("strength") = 0.5, py::arg("spacing") = 0.2, py::arg("target_edge_length") = 0.0,
@@ -69,14 +80,56 @@ void bind_sculpt(py::module_& m) {
             py::dict d;
             d["V"] = RowMatrixX3d(out.V);
             d["F"] = RowMatrixX3i(out.F);
-            d["labels"] = labels;
-            d["modified"] = std::vector<bool>(modified.begin(), modified.end());
+            d["labels"] = Eigen::VectorXi(Eigen::Map<const Eigen::VectorXi>(labels.data(), static_cast<Eigen::Index>(labels.size())));
+            Eigen::Matrix<bool, Eigen::Dynamic, 1> changed(static_cast<Eigen::Index>(modified.size()));
+            for (size_t f = 0; f < modified.size(); ++f) changed[static_cast<Eigen::Index>(f)] = modified[f] != 0;
+            d["modified"] = changed;
             return d;
           },
           "The mesh now: dict(V, F, labels (per face, carried from the face it came from), modified (per face: "
           "changed since the marks were last cleared)).")
       .def("clear_marks", &SculptMesh::clear_marks, "Forgets which faces were modified.")
       .def_property_readonly("faces", &SculptMesh::num_faces);
+
+  py::class_<Stroke>(m, "Stroke",
+                     "A stroke under way on a Sculptor, dab by dab as its points come (brushes.h: the same dabs "
+                     "as one stroke of all the points).")
+      .def(py::init([](SculptMesh& mesh, const std::string& brush, const Eigen::Vector3d& point,
+                       const Eigen::Vector3d& direction, double radius, double strength, double spacing,
+                       double target_edge_length, bool dynamic_topology) {
+             const StrokeOptions options =
+                 stroke_options(radius, strength, spacing, target_edge_length, dynamic_topology);
+             const Brush b = brush_named(brush);
+             py::gil_scoped_release release;
+             return std::make_unique<Stroke>(mesh, b, point, direction, options);
+           }),
+           py::arg("sculptor"), py::arg("brush"), py::arg("point"), py::arg("direction"), py::kw_only(),
+           py::arg("radius"), py::arg("strength") = 0.5, py::arg("spacing") = 0.2, py::arg("target_edge_length") = 0.0,
+           py::arg("dynamic_topology") = true, py::keep_alive<1, 2>(),
+           "Starts a stroke on `sculptor` at `point` seen along `direction` (zero: from every side), with its "
+           "first dab.")
+      .def(
+          "extend",
+          [](Stroke& stroke, const Eigen::Ref<const RowMatrixX3d>& points, const Eigen::Ref<const RowMatrixX3d>& directions) {
+            if (directions.rows() != 0 && directions.rows() != points.rows())
+              throw std::invalid_argument("one view direction per stroke point, or none");
+            const MatrixX3d p = points, d = directions;
+            py::gil_scoped_release release;
+            for (Eigen::Index i = 0; i < p.rows(); ++i)
+              stroke.extend(p.row(i).transpose(), d.rows() ? Eigen::Vector3d(d.row(i).transpose()) : Eigen::Vector3d::Zero());
+          },
+          py::arg("points"), py::arg("directions"), "Continues the stroke through points (#S x 3), seen along directions (#S x 3, or 0 rows).")
+      .def(
+          "finish",
+          [](Stroke& stroke) {
+            StrokeReport report;
+            {
+              py::gil_scoped_release release;
+              report = stroke.finish();
+            }
+            return report_dict(report);
+          },
+          "Ends the stroke. Returns dict(dabs, moved_vertices, target_edge_length).");
 
   m.def(
       "onto_surface",

@@ -163,29 +163,6 @@ double median_edge_length(const SculptMesh& mesh, const std::vector<int>& vertic
   return lengths[lengths.size() / 2];
 }
 
-// The dabs' centres and view directions: every `step` along the polyline of `points`.
-std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> dabs_along(const MatrixX3d& points, const MatrixX3d& directions,
-                                                                    double step) {
-  auto view = [&](Eigen::Index i) {
-    return directions.rows() ? Eigen::Vector3d(directions.row(i).transpose().normalized()) : Eigen::Vector3d::Zero();
-  };
-  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> out{{points.row(0).transpose(), view(0)}};
-  double carried = 0.0;  // distance since the last dab
-  for (Eigen::Index i = 1; i < points.rows(); ++i) {
-    const Eigen::Vector3d a = points.row(i - 1).transpose(), b = points.row(i).transpose();
-    const double length = (b - a).norm();
-    double at = step - carried;
-    for (; at <= length; at += step) {
-      const double t = at / length;
-      Eigen::Vector3d d = (1.0 - t) * view(i - 1) + t * view(i);
-      if (d.norm() > 0.0) d.normalize();
-      out.emplace_back((1.0 - t) * a + t * b, d);
-    }
-    carried = length - (at - step);
-  }
-  return out;
-}
-
 }  // namespace
 
 Brush brush_named(const std::string& name) {
@@ -197,58 +174,91 @@ Brush brush_named(const std::string& name) {
   throw std::invalid_argument("unknown brush '" + name + "': draw, inflate, flatten, smooth, pinch, crease or grab");
 }
 
-StrokeReport sculpt_stroke(SculptMesh& mesh, Brush brush, const MatrixX3d& points, const MatrixX3d& directions,
-                           const StrokeOptions& options) {
+Stroke::Stroke(SculptMesh& mesh, Brush brush, const Eigen::Vector3d& point, const Eigen::Vector3d& view,
+               const StrokeOptions& options)
+    : mesh_(mesh), brush_(brush), options_(options), step_(options.spacing * options.radius), point_(point),
+      view_(view.norm() > 0.0 ? view.normalized() : Eigen::Vector3d::Zero()) {
   if (!(options.radius > 0.0)) throw std::invalid_argument("the brush radius must be positive");
   if (!(options.spacing > 0.0)) throw std::invalid_argument("the dab spacing must be positive");
+  const Region first = gather(mesh_, point_, view_, options_.radius, stamp_, mark_++);
+  report_.target_edge_length = std::max(
+      options_.target_edge_length > 0.0 ? options_.target_edge_length : median_edge_length(mesh_, first.vertices),
+      kFinestShare * options_.radius);
+  if (brush_ == Brush::Grab) {
+    // The vertices under the first point follow the stroke; the mesh catches up at the end.
+    held_ = first.vertices;
+    held_weights_ = first.weights;
+    report_.dabs = 1;
+    report_.moved_vertices = static_cast<int>(held_.size());
+  } else {
+    dab(point_, view_);
+  }
+}
+
+void Stroke::extend(const Eigen::Vector3d& point, const Eigen::Vector3d& view) {
+  if (finished_) throw std::logic_error("the stroke has ended");
+  const Eigen::Vector3d to_view = view.norm() > 0.0 ? view.normalized() : Eigen::Vector3d::Zero();
+  const double length = (point - point_).norm();
+  double at = step_ - carried_;
+  for (; at <= length; at += step_) {
+    const double t = at / length;
+    Eigen::Vector3d d = (1.0 - t) * view_ + t * to_view;
+    if (d.norm() > 0.0) d.normalize();
+    if (brush_ == Brush::Grab) ++report_.dabs;
+    else dab((1.0 - t) * point_ + t * point, d);
+  }
+  carried_ = length - (at - step_);
+  if (brush_ == Brush::Grab) {
+    const Eigen::Vector3d delta = options_.strength * (point - point_);
+    for (size_t i = 0; i < held_.size(); ++i) mesh_.position(held_[i]) += held_weights_[i] * delta;
+    for (int v : held_) mark_around(mesh_, v);
+  }
+  point_ = point;
+  view_ = to_view;
+}
+
+StrokeReport Stroke::finish() {
+  if (!finished_ && brush_ == Brush::Grab) remesh(held_, 2);  // two rounds: a grab stretches edges by the whole stroke at once
+  finished_ = true;
+  return report_;
+}
+
+void Stroke::dab(const Eigen::Vector3d& centre, const Eigen::Vector3d& view) {
+  const Region region = gather(mesh_, centre, view, options_.radius, stamp_, mark_++);
+  if (region.vertices.empty()) return;
+  const std::vector<Eigen::Vector3d> targets =
+      dab_targets(mesh_, brush_, region, centre, options_.radius, options_.strength, step_);
+  for (size_t i = 0; i < region.vertices.size(); ++i) mesh_.position(region.vertices[i]) = targets[i];
+  for (int v : region.vertices) mark_around(mesh_, v);
+  ++report_.dabs;
+  report_.moved_vertices += static_cast<int>(region.vertices.size());
+  remesh(region.vertices, 1);
+}
+
+void Stroke::remesh(const std::vector<int>& vertices, int rounds) {
+  if (!options_.dynamic_topology || !(report_.target_edge_length > 0.0)) return;
+  DynamicTopologyOptions topology;
+  topology.target_edge_length = report_.target_edge_length;
+  topology.rounds = rounds;
+  if (static_cast<int>(active_.size()) < mesh_.vertex_slots()) active_.resize(mesh_.vertex_slots(), 0);
+  const int slots = mesh_.vertex_slots();
+  for (int v : vertices) active_[v] = 1;
+  remesh_region(mesh_, active_, topology);
+  for (int v : vertices) active_[v] = 0;
+  std::fill(active_.begin() + std::min<long>(slots, static_cast<long>(active_.size())), active_.end(), 0);
+}
+
+StrokeReport sculpt_stroke(SculptMesh& mesh, Brush brush, const MatrixX3d& points, const MatrixX3d& directions,
+                           const StrokeOptions& options) {
   if (points.rows() == 0) throw std::invalid_argument("a stroke needs at least one point");
   if (directions.rows() != 0 && directions.rows() != points.rows())
     throw std::invalid_argument("one view direction per stroke point, or none");
-  const double step = options.spacing * options.radius;
-  const auto dabs = dabs_along(points, directions, step);
-  StrokeReport report;
-  std::vector<int> stamp(mesh.vertex_slots(), -1);
-  int mark = 0;
-  const Region first = gather(mesh, dabs[0].first, dabs[0].second, options.radius, stamp, mark++);
-  report.target_edge_length = std::max(
-      options.target_edge_length > 0.0 ? options.target_edge_length : median_edge_length(mesh, first.vertices),
-      kFinestShare * options.radius);
-  DynamicTopologyOptions topology;
-  topology.target_edge_length = report.target_edge_length;
-  std::vector<char> active(mesh.vertex_slots(), 0);
-  auto remesh = [&](const std::vector<int>& vertices, int rounds) {
-    if (!options.dynamic_topology || !(topology.target_edge_length > 0.0)) return;
-    const int slots = mesh.vertex_slots();
-    for (int v : vertices) active[v] = 1;
-    topology.rounds = rounds;
-    remesh_region(mesh, active, topology);
-    for (int v : vertices) active[v] = 0;
-    std::fill(active.begin() + std::min<long>(slots, static_cast<long>(active.size())), active.end(), 0);
+  const auto view = [&](Eigen::Index i) {
+    return directions.rows() ? Eigen::Vector3d(directions.row(i).transpose()) : Eigen::Vector3d::Zero();
   };
-  if (brush == Brush::Grab) {
-    // The vertices under the first point follow the stroke to its last; the mesh catches up at the end.
-    const Eigen::Vector3d delta = options.strength * (points.row(points.rows() - 1) - points.row(0)).transpose();
-    for (size_t i = 0; i < first.vertices.size(); ++i) mesh.position(first.vertices[i]) += first.weights[i] * delta;
-    for (int v : first.vertices) mark_around(mesh, v);
-    report.dabs = static_cast<int>(dabs.size());
-    report.moved_vertices = static_cast<int>(first.vertices.size());
-    // Two rounds: a grab stretches edges by the whole stroke at once.
-    remesh(first.vertices, 2);
-    return report;
-  }
-  for (const auto& [centre, view] : dabs) {
-    const Region region = gather(mesh, centre, view, options.radius, stamp, mark++);
-    if (region.vertices.empty()) continue;
-    const std::vector<Eigen::Vector3d> targets =
-        dab_targets(mesh, brush, region, centre, options.radius, options.strength, step);
-    for (size_t i = 0; i < region.vertices.size(); ++i) mesh.position(region.vertices[i]) = targets[i];
-    for (int v : region.vertices) mark_around(mesh, v);
-    ++report.dabs;
-    report.moved_vertices += static_cast<int>(region.vertices.size());
-    remesh(region.vertices, 1);
-    if (static_cast<int>(stamp.size()) < mesh.vertex_slots()) stamp.resize(mesh.vertex_slots(), -1);
-  }
-  return report;
+  Stroke stroke(mesh, brush, points.row(0).transpose(), view(0), options);
+  for (Eigen::Index i = 1; i < points.rows(); ++i) stroke.extend(points.row(i).transpose(), view(i));
+  return stroke.finish();
 }
 
 }  // namespace idealize

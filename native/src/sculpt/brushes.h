@@ -52,11 +52,46 @@ struct StrokeReport {
   double target_edge_length = 0.0;
 };
 
+// A stroke under way, dab by dab as its points come (a drag in the 3D view): the first dab at the
+// first point, then one every options.spacing * radius along the polyline of the points given
+// since. The dabs, and so the mesh, are the same however the points are handed in: all at once
+// (sculpt_stroke) or one by one as the pointer moves. Faces changed are marked in the mesh
+// (SculptMesh::modified). The mesh must not change otherwise while the stroke is under way.
+class Stroke {
+ public:
+  // Starts at `point`, seen along `view` (into the scene; vertices facing away are left alone;
+  // zero: from every side), with the first dab. Throws std::invalid_argument for a radius or a
+  // spacing that is not positive.
+  Stroke(SculptMesh& mesh, Brush brush, const Eigen::Vector3d& point, const Eigen::Vector3d& view,
+         const StrokeOptions& options);
+  // Continues to `point`: the dabs on the way (a grab moves what it holds by the way).
+  void extend(const Eigen::Vector3d& point, const Eigen::Vector3d& view);
+  // Ends the stroke: a grab's mesh catches up (remeshed around what it moved). Returns the report.
+  StrokeReport finish();
+  const StrokeReport& report() const { return report_; }
+
+ private:
+  void dab(const Eigen::Vector3d& centre, const Eigen::Vector3d& view);
+  void remesh(const std::vector<int>& vertices, int rounds);
+
+  SculptMesh& mesh_;
+  Brush brush_;
+  StrokeOptions options_;
+  double step_;
+  Eigen::Vector3d point_, view_;  // where the stroke is
+  double carried_ = 0.0;          // the distance since the last dab
+  std::vector<int> stamp_;        // per vertex slot: scratch of the regions' gathering
+  int mark_ = 0;
+  std::vector<char> active_;      // per vertex slot: what dynamic topology works on
+  std::vector<int> held_;         // a grab's vertices, with their weights
+  std::vector<double> held_weights_;
+  StrokeReport report_;
+  bool finished_ = false;
+};
+
 // Applies `brush` along a stroke: `points` (#S x 3) on or near the surface, `directions` (#S x 3,
-// or 0 rows) the view direction at each (into the scene; vertices facing away are left alone).
-// Dabs are placed every options.spacing * radius along the polyline. Faces changed are marked in
-// `mesh` (SculptMesh::modified). Throws std::invalid_argument for a radius that is not positive or
-// mismatched arrays.
+// or 0 rows) the view direction at each (see Stroke). Throws std::invalid_argument for a radius
+// that is not positive or mismatched arrays.
 StrokeReport sculpt_stroke(SculptMesh& mesh, Brush brush, const MatrixX3d& points, const MatrixX3d& directions,
                            const StrokeOptions& options);
 
