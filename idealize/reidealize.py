@@ -289,6 +289,16 @@ def _snap_directions(layer, features, count):
             f["params"] = dict(f["params"], **{key: (np.sign(dots[k]) * kept[k]).tolist()})
 
 
+def _per_vertex(F, faces, values):
+    """The vertices of `faces` (indices into F) and, per vertex, the sum of `values` (one per face
+    of `faces`: numbers, or rows) over its faces among them."""
+    vertices, index = np.unique(F[faces], return_inverse=True)
+    values = np.asarray(values, dtype=float)
+    sums = np.zeros((len(vertices),) + values.shape[1:])
+    np.add.at(sums, index.ravel(), np.repeat(values, 3, axis=0))
+    return vertices, sums
+
+
 def _refit_inside(V, F, labels, features, count, near):
     """New features of the region refitted to their inner vertices, those on no other feature's
     face: a sculpted feature's border is a transition rounded by the brushes (the rim of a groove,
@@ -309,8 +319,7 @@ def _refit_inside(V, F, labels, features, count, near):
         mine = faces[labels[faces] == f["id"]]
         if f["type"] not in ("plane", "cylinder", "sphere") or not len(mine):
             continue
-        vertices, index = np.unique(F[mine], return_inverse=True)
-        weights = np.bincount(index, weights=np.repeat(areas[mine], 3), minlength=len(vertices))
+        vertices, weights = _per_vertex(F, mine, areas[mine])
         inside = owners[vertices] == 1
         if inside.sum() < max(MIN_REFIT_POINTS, len(vertices) / 3.0):
             continue
@@ -347,10 +356,7 @@ def _dissolve_folded(V, F, labels, features, count, neighbours):
         a, b, c = V[F[mine, 0]], V[F[mine, 1]], V[F[mine, 2]]
         normals, centres = np.zeros((len(F), 3)), np.zeros((len(F), 3))
         normals[mine], centres[mine] = np.cross(b - a, c - a), (a + b + c) / 3.0
-        vertices, index = np.unique(F[mine], return_inverse=True)
-        vertex_normals = np.zeros((len(vertices), 3))
-        for k in range(3):
-            np.add.at(vertex_normals, index.reshape(-1, 3)[:, k], normals[mine])
+        vertices, vertex_normals = _per_vertex(F, mine, normals[mine])
         vertex_normals /= np.maximum(np.linalg.norm(vertex_normals, axis=1), 1e-300)[:, None]
         if native.fit_bspline_surface(np.ascontiguousarray(V[vertices], float), vertex_normals,
                                       np.ones(len(vertices)))["valid"]:

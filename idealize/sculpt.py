@@ -173,6 +173,12 @@ class Sculptor:
         self._snapshot = None
         return dict(stroke.finish())
 
+    def first_hit(self, origin, direction):
+        """Where the ray from `origin` (3,) along `direction` (3,) first meets the mesh as it is now
+        (front or back faces), as a (3,) array, or None: a view's picking on the clay."""
+        hit = self._native.first_hit(_points(origin, "ray")[0], _points(direction, "ray")[0])
+        return None if hit is None else np.asarray(hit, dtype=float)
+
     def _state(self):
         if self._snapshot is None:
             self._snapshot = self._native.mesh()

@@ -171,6 +171,17 @@ def test_a_stroke_under_way_must_end_before_another_begins(sphere):
         sculptor.end()
 
 
+def test_a_ray_picks_the_clay_as_it_is_now(sphere):
+    sculptor = sculpt.Sculptor(sphere)
+    hit = sculptor.first_hit([0, 0, 3 * RADIUS], [0, 0, -1])
+    assert hit[2] == pytest.approx(RADIUS, abs=0.05)  # the near side, not the far one
+    assert sculptor.first_hit([0, 0, 3 * RADIUS], [0, 0, 1]) is None  # it looks away
+    assert sculptor.first_hit([0, 0, 0], [0, 0, 1])[2] == pytest.approx(RADIUS, abs=0.05)  # from inside
+    sculptor.stroke("draw", [[0, 0, RADIUS]], [[0, 0, -1]], radius=3.0, strength=1.0)
+    raised = sculptor.first_hit([0, 0, 3 * RADIUS], [0, 0, -1])
+    assert raised[2] == pytest.approx(sculptor.mesh().vertices[:, 2].max(), abs=0.05) and raised[2] > hit[2] + 0.1
+
+
 def test_bad_input_is_refused_with_a_message(sphere):
     points, directions = stroke_over([0, 0, 1], [0.1, 0, 1])
     with pytest.raises(ValueError, match="unknown brush"):

@@ -120,6 +120,7 @@ class SculptPanel:
         self.sculptor = None  # the clay under the pointer: a Sculptor of sculptor_layer
         self.sculptor_layer = None
         self.sculptor_stale = True  # the layer has changed since: start again from it when idle
+        self.ready_sculptor = None  # (layer, a Sculptor of it) made by the worker for the next stroke
         self.refresh_timer = None
         self.callbacks = [
             (coin.SoMouseButtonEvent.getClassTypeId(), self.view.addEventCallbackPivy(
@@ -140,14 +141,27 @@ class SculptPanel:
 
     # The view's events.
     def pick(self, position):
-        """The point of the layer (or of the preview drawn in its place) under the screen position,
+        """The point of the layer (or of the clay drawn in its place) under the screen position,
         or None."""
-        if self.preview.shown:
-            return self.preview.pick(position)
+        if self.preview.shown and self.sculptor is not None:
+            return self.sculptor.first_hit(*self.ray(position))
         info = self.view.getObjectInfo((int(position[0]), int(position[1])))
         if not info or info.get("Object") != self.obj.Name:
             return None
         return np.array([info["x"], info["y"], info["z"]], dtype=float)
+
+    def ray(self, position):
+        """The view's ray through the screen position, towards the scene: (origin, direction)."""
+        on_plane = self.view.getPointOnFocalPlane(int(position[0]), int(position[1]))
+        point = np.array([on_plane.x, on_plane.y, on_plane.z], dtype=float)
+        if self.view.getCameraType() == "Perspective":
+            eye = np.array(self.view.getCameraNode().position.getValue(), dtype=float)
+            return eye, point - eye
+        # Orthographic: from behind everything shown (the focal plane may cut the part).
+        V = self.layer.idealized_vertices
+        low, high = V.min(axis=0), V.max(axis=0)
+        reach = np.linalg.norm(high - low) + np.linalg.norm(point - 0.5 * (low + high))
+        return point - 2.0 * reach * self.direction(), self.direction()
 
     def direction(self):
         d = self.view.getViewDirection()
@@ -203,7 +217,10 @@ class SculptPanel:
             self.sculptor_stale = True
         try:
             if self.sculptor is None or (self.sculptor_stale and not self.busy and not self.pending):
-                self.sculptor, self.sculptor_layer = sculpt.Sculptor(self.layer), self.layer
+                ready, self.ready_sculptor = self.ready_sculptor, None
+                if ready is None or ready[0] is not self.layer:
+                    ready = (self.layer, sculpt.Sculptor(self.layer))
+                self.sculptor_layer, self.sculptor = ready
                 self.sculptor_stale = False
             step = self.stroke_step([point.tolist()], [direction.tolist()])
             self.sculptor.begin(step["brush"], point, direction, radius=step["radius"], strength=step["strength"])
@@ -276,6 +293,8 @@ class SculptPanel:
         def work():
             try:
                 outcome["record"] = layer_object.edit_record(inputs, step)
+                # The next stroke's clay, made here rather than at its press.
+                outcome["sculptor"] = sculpt.Sculptor(outcome["record"].layer)
             except Exception as error:  # reported in the GUI's thread
                 outcome["error"] = error
         thread = threading.Thread(target=work, name="Idealize sculpt", daemon=True)
@@ -309,6 +328,8 @@ class SculptPanel:
             done = apply_in_one_step(self.obj, step, "Sculpt stroke", edited)
             if done is not None:
                 self.layer, self.layer_edits = done[0], getattr(self.obj, "Edits", "")
+                if edited is not None and done[0] is edited.layer:
+                    self.ready_sculptor = (done[0], outcome["sculptor"])
                 self.strokes_applied += 1
                 new = sum(1 for f in self.layer.features if f["triangles"])
                 self.form.status.setText("%d strokes; the layer has %d features." % (self.strokes_applied, new))

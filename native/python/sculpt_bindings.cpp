@@ -88,6 +88,20 @@ void bind_sculpt(py::module_& m) {
           },
           "The mesh now: dict(V, F, labels (per face, carried from the face it came from), modified (per face: "
           "changed since the marks were last cleared)).")
+      .def(
+          "first_hit",
+          [](const SculptMesh& mesh, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) -> py::object {
+            if (!(direction.norm() > 0.0)) throw std::invalid_argument("a ray needs a direction");
+            Eigen::Vector3d hit;
+            bool found;
+            {
+              py::gil_scoped_release release;
+              found = first_hit(mesh, origin, direction, hit);
+            }
+            return found ? py::cast(hit) : py::none();
+          },
+          py::arg("origin"), py::arg("direction"),
+          "Where the ray from origin along direction first meets the mesh (a 3-vector), or None.")
       .def("clear_marks", &SculptMesh::clear_marks, "Forgets which faces were modified.")
       .def_property_readonly("faces", &SculptMesh::num_faces);
 
