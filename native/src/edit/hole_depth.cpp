@@ -1,6 +1,7 @@
 // A hole made afresh at another depth (see hole_depth.h).
 #include "edit/hole_depth.h"
 
+#include "core/ray.h"
 #include "edit/decals.h"
 #include "edit/feature_groups.h"
 #include "edit/gaps.h"
@@ -20,23 +21,14 @@ std::string named(int id, const Surface& s) {
 }
 
 // The nearest triangle the ray from `origin` along `direction` (unit) meets beyond `skip`, and the
-// distance to it (Moller-Trumbore); -1 when it meets none.
+// distance to it (core/ray.h); -1 when it meets none.
 int first_hit(const TriangleMesh& mesh, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double skip,
               double& distance) {
   int best = -1;
   distance = std::numeric_limits<double>::infinity();
   for (int f = 0; f < mesh.num_faces(); ++f) {
-    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-    const Eigen::Vector3d e1 = b - a, e2 = c - a, p = direction.cross(e2);
-    const double det = e1.dot(p);
-    if (std::abs(det) < 1e-300) continue;
-    const Eigen::Vector3d s = origin - a;
-    const double u = s.dot(p) / det;
-    if (u < 0.0 || u > 1.0) continue;
-    const Eigen::Vector3d q = s.cross(e1);
-    const double v = direction.dot(q) / det;
-    if (v < 0.0 || u + v > 1.0) continue;
-    const double t = e2.dot(q) / det;
+    const double t = ray_triangle(origin, direction, mesh.V.row(mesh.F(f, 0)), mesh.V.row(mesh.F(f, 1)),
+                                  mesh.V.row(mesh.F(f, 2)));
     if (t > skip && t < distance) {
       distance = t;
       best = f;

@@ -2,6 +2,8 @@
 // follow pmp-library's SurfaceMesh (split, collapse with its two helpers, flip).
 #include "sculpt/sculpt_mesh.h"
 
+#include "core/ray.h"
+
 #include <cmath>
 #include <limits>
 #include <string>
@@ -371,18 +373,8 @@ bool first_hit(const SculptMesh& mesh, const Eigen::Vector3d& origin, const Eige
   for (int f = 0; f < mesh.face_slots(); ++f) {
     if (mesh.face_deleted(f)) continue;
     const int h = mesh.face_halfedge(f);
-    const Eigen::Vector3d& a = mesh.position(mesh.from(h));
-    const Eigen::Vector3d e1 = mesh.position(mesh.to(h)) - a, e2 = mesh.position(mesh.to(mesh.next(h))) - a;
-    const Eigen::Vector3d p = direction.cross(e2);
-    const double det = e1.dot(p);
-    if (det == 0.0) continue;  // the ray runs along the face's plane
-    const Eigen::Vector3d s = origin - a;
-    const double u = s.dot(p) / det;
-    if (u < 0.0 || u > 1.0) continue;
-    const Eigen::Vector3d q = s.cross(e1);
-    const double v = direction.dot(q) / det;
-    if (v < 0.0 || u + v > 1.0) continue;
-    const double t = e2.dot(q) / det;
+    const double t = ray_triangle(origin, direction, mesh.position(mesh.from(h)), mesh.position(mesh.to(h)),
+                                  mesh.position(mesh.to(mesh.next(h))));
     if (t >= 0.0 && t < nearest) nearest = t;
   }
   if (!std::isfinite(nearest)) return false;

@@ -99,9 +99,8 @@ class SculptMesh {
 };
 
 // Where the ray from `origin` along `direction` (not zero) first meets a face of `mesh` (front or
-// back; the smallest parameter t >= 0 of origin + t direction; Möller & Trumbore, "Fast, minimum
-// storage ray-triangle intersection", 1997): the picking of a view, on the mesh as it is being
-// sculpted. False when it meets none.
+// back; the smallest parameter t >= 0 of origin + t direction; core/ray.h): the picking of a view,
+// on the mesh as it is being sculpted. False when it meets none.
 bool first_hit(const SculptMesh& mesh, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                Eigen::Vector3d& hit);
 
