@@ -68,11 +68,14 @@ def run():
     live = panel.preview.coordinates.point.getValues() if panel.preview.shown else []
     result["live"] = {"shown": panel.preview.shown, "layer_hidden": not layer.ViewObject.Visibility,
                       "top": max((p[2] for p in live), default=0.0)}
+    # The stroke is re-idealized in a worker thread: the GUI goes on meanwhile. (The panel looks for
+    # the result later than usual here, so that a quick worker is not taken for none.)
+    task_sculpt.POLL_MS = 3000
     send(QtCore.QEvent.MouseButtonRelease, path[-1], QtCore.Qt.NoButton)
     QtGui.QApplication.processEvents()
-    # The stroke is sculpted and re-idealized in a worker thread: the GUI goes on meanwhile.
     result["busy_after_release"] = panel.busy
     result["undo_steps_while_busy"] = len(doc.UndoNames) - undo_before
+    task_sculpt.POLL_MS = 30
     for _ in range(600):
         if not panel.busy:
             break

@@ -27,6 +27,7 @@ from .. import sculpt
 from ..freecad import layer_object
 from ..freecad.mesh import SURFACE_COLORS, type_colors
 from .task_push_pull import Preview, apply_in_one_step
+from .view_layer import refresh_colors
 
 UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                        "Resources", "ui", "Sculpt.ui")
@@ -228,6 +229,8 @@ class SculptPanel:
             self.sculptor = None
             self.form.status.setText("Cannot sculpt here: %s" % error)
             return
+        # The layer is hidden while the clay shows: not left highlighted as the pointer found it.
+        FreeCADGui.Selection.clearPreselection()
         self.refresh()
 
     def schedule_refresh(self):
@@ -254,7 +257,10 @@ class SculptPanel:
     def show_stored(self):
         """Once every stroke is stored and none is under way: the layer again, re-idealized."""
         if not self.busy and self.stroke is None and not self.pending:
-            self.preview.hide()
+            if self.preview.shown:
+                self.preview.hide()
+                # The mesh view takes the colours stored while it was hidden only when told again.
+                refresh_colors(self.obj.ViewObject)
             self.sculptor_stale = True
 
     # Strokes.
