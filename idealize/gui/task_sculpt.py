@@ -27,7 +27,6 @@ from .. import sculpt
 from ..freecad import layer_object
 from ..freecad.mesh import SURFACE_COLORS, type_colors
 from .task_push_pull import Preview, apply_in_one_step
-from .view_layer import refresh_colors
 
 UI_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                        "Resources", "ui", "Sculpt.ui")
@@ -259,8 +258,6 @@ class SculptPanel:
         if not self.busy and self.stroke is None and not self.pending:
             if self.preview.shown:
                 self.preview.hide()
-                # The mesh view takes the colours stored while it was hidden only when told again.
-                refresh_colors(self.obj.ViewObject)
             self.sculptor_stale = True
 
     # Strokes.
