@@ -113,6 +113,32 @@ def run():
     doc.redo()
     doc.recompute()
     result["redone"] = mesh_state(layer)
+
+    # Re-idealization off: the strokes show as clay and are applied as one step when the panel closes.
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(doc.Name, layer.Name)
+    Gui.runCommand("Idealize_Sculpt")
+    wait(0.5)
+    panel = task_sculpt.active_panel
+    panel.form.reidealize.setChecked(False)
+    panel.form.brush.setCurrentIndex(panel.form.brush.findData("draw"))
+    panel.form.radius.setValue(6.0)
+    panel.form.strength.setValue(1.0)
+    steps = len(doc.UndoNames)
+    for y in (10, 30):
+        drag = [screen((12 + 10 * t / 10, y, 20)) for t in range(11)]
+        send(QtCore.QEvent.MouseButtonPress, drag[0], QtCore.Qt.LeftButton)
+        for point in drag[1:]:
+            send(QtCore.QEvent.MouseMove, point, QtCore.Qt.LeftButton)
+        send(QtCore.QEvent.MouseButtonRelease, drag[-1], QtCore.Qt.NoButton)
+        wait(0.3)
+    result["deferred"] = {"shown": panel.preview.shown, "steps_before_close": len(doc.UndoNames) - steps,
+                          "waiting": len(panel.pending)}
+    panel.close()
+    wait(0.5)
+    result["deferred"].update(mesh_state(layer), steps_after_close=len(doc.UndoNames) - steps,
+                              undo_name=doc.UndoNames[0] if doc.UndoNames else None,
+                              edits=len(json.loads(layer.Edits or "[]")), layer_shown=layer.ViewObject.Visibility)
 '''
 
 
@@ -163,3 +189,11 @@ def test_undo_restores_the_mesh_and_the_layer_and_close_leaves(sculpt_run):
     assert undone["all_features"] == before["all_features"]
     again = sculpt_run["again"]
     assert redone["facets"] == again["facets"] and redone["top"] == pytest.approx(again["top"])
+
+
+def test_with_reidealization_off_the_strokes_are_one_step_when_the_panel_closes(sculpt_run):
+    deferred, redone = sculpt_run["deferred"], sculpt_run["redone"]
+    assert deferred["shown"] and deferred["waiting"] == 2 and deferred["steps_before_close"] == 0
+    assert deferred["steps_after_close"] == 1 and deferred["undo_name"] == "Sculpt"
+    assert deferred["edits"] == 2 and deferred["layer_shown"]  # the stroke before, and these two as one
+    assert deferred["all_features"] > redone["all_features"]
