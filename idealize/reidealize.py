@@ -267,17 +267,21 @@ def _snap_directions(layer, features, count):
     layer's angle tolerance of a kept feature's become that direction exactly: the idealization's
     snapping to the part's ideal directions (thesis 4.3.1), with the kept features as the part. A
     groove dug along a face gets its axis parallel to the face. (Their positions are refitted about
-    the new direction next; cones and tori, which are not, keep theirs.)"""
-    kept = []
+    the new direction next; cones and tori, which are not, keep theirs.)
+    Returns {new feature id: the kept features it is now parallel to} (those within the angle
+    tolerance of the direction it took, as the idealization made them parallel)."""
+    kept, owners = [], []
     for f in features[:count]:
         key = "normal" if f["type"] == "plane" else "axis"
         if key in f.get("params", {}):
             kept.append(np.asarray(f["params"][key], float))
+            owners.append(f["id"])
     if not kept:
-        return
+        return {}
     kept = np.array(kept)
     kept /= np.linalg.norm(kept, axis=1)[:, None]
     cosine = np.cos(np.radians(layer.angle_tolerance or 10.0))
+    snapped = {}
     for f in features[count:]:
         if f["type"] not in ("plane", "cylinder"):  # the two that _refit_inside refits about it
             continue
@@ -287,6 +291,37 @@ def _snap_directions(layer, features, count):
         k = int(np.argmax(np.abs(dots)))
         if abs(dots[k]) >= cosine:
             f["params"] = dict(f["params"], **{key: (np.sign(dots[k]) * kept[k]).tolist()})
+            snapped[f["id"]] = [owners[j] for j in np.flatnonzero(np.abs(kept @ kept[k]) >= cosine)]
+    return snapped
+
+
+def _join_parallel(relations, snapped):
+    """The relations with each snapped new feature parallel to the kept features it took its
+    direction from: groups of parallel features that share a member become one group, in the place
+    of the first of them (the layer's other relations keep their order)."""
+    out, groups = [], []  # groups: the places in `out` of the parallel groups
+
+    def join(relation):
+        members = set(relation["features"])
+        hits = [k for k in groups if out[k] is not None and members & set(out[k]["features"])]
+        for k in hits:
+            members |= set(out[k]["features"])
+        if not hits:
+            groups.append(len(out))
+            out.append(dict(relation, features=sorted(members)))
+            return
+        out[hits[0]] = dict(out[hits[0]], features=sorted(members))
+        for k in hits[1:]:
+            out[k] = None
+
+    for r in relations:
+        if r["kind"] == "parallel":
+            join(r)
+        else:
+            out.append(r)
+    for new, kept in sorted(snapped.items()):
+        join({"kind": "parallel", "features": sorted(set(kept) | {new})})
+    return [r for r in out if r is not None and len(r["features"]) >= 2]
 
 
 def _per_vertex(F, faces, values):
@@ -464,7 +499,7 @@ def reidealize(layer, mesh, modified=None, labels=None, rings=RINGS):
             members = sorted({mapping[m] for m in r["features"] if m in mapping})
             if len(members) >= 2 and any(m >= count for m in members):
                 relations.append(dict(r, features=members))
-    _snap_directions(layer, features, count)
+    relations = _join_parallel(relations, _snap_directions(layer, features, count))
     _refit_inside(V, F, labels, features, count, near)
     relations += _semi_defined(layer, V, F, labels, features, count, neighbours)
     _dissolve_folded(V, F, labels, features, count, neighbours)
@@ -500,7 +535,13 @@ def _assemble(layer, mesh, labels, changed, features, relations, adjacency_befor
     adjacency = [adjacency_before.get(p) or dict(sub_adjacency.get(p, {"continuity": "G0", "angle": 0.0, "length": 0.0}),
                                                   a=p[0], b=p[1]) for p in map(tuple, tables["adjacent"].tolist())]
     present = {f["id"] for f in features}
-    relations = [r for r in relations if all(m in present for m in r["features"])]
+    unique, seen = [], set()  # the region's relations may repeat one (two of its features became one)
+    for r in relations:
+        key = (r["kind"], tuple(r["features"]))
+        if key not in seen and all(m in present for m in r["features"]):
+            seen.add(key)
+            unique.append(r)
+    relations = unique
     for f in features:
         f["area"], f["triangles"] = float(tables["area"][f["id"]]), int(tables["triangles"][f["id"]])
     finite = deviation[np.isfinite(deviation)]

@@ -367,8 +367,8 @@ def test_a_bump_flattened_away_is_absorbed_by_its_face(box_layer):
 
 
 def test_a_groove_sculpted_towards_a_cylinder_becomes_it_with_the_faces_direction():
-    """The groove's cylinder: its axis exactly the block's x (snapped to the kept faces' directions),
-    its radius and axis within 2 % of the target's (refitted to its inner vertices, away from the
+    """The groove's cylinder: its axis exactly the block's x (snapped to the kept faces' directions,
+    and in their group of parallel features), its radius and axis within 2 % of the target's (refitted to its inner vertices, away from the
     rim the brushes rounded). On a mesh of 1 mm: four edges across the groove's radius."""
     if shapes.freecad() is None:
         pytest.skip("FreeCAD is not installed")
@@ -389,6 +389,12 @@ def test_a_groove_sculpted_towards_a_cylinder_becomes_it_with_the_faces_directio
     p = groove["params"]
     assert any(np.array_equal(np.abs(p["axis"]), np.abs(f["params"]["normal"])) for f in box_layer.features)
     assert abs(p["axis"][0]) == pytest.approx(1.0)
+    # ... and related to them as the idealization relates parallel features: one group.
+    ends = {f["id"] for f in box_layer.features if f["type"] == "plane" and abs(f["params"]["normal"][0]) == 1.0}
+    assert any(r["kind"] == "parallel" and {groove["id"]} | ends <= set(r["features"]) for r in layer.relations)
+    parallel = [f for r in layer.relations if r["kind"] == "parallel" for f in r["features"]]
+    assert len(parallel) == len(set(parallel))  # each feature in one group: the kept ones' grew
+    assert len({(r["kind"], tuple(r["features"])) for r in layer.relations}) == len(layer.relations)
     assert p["radius"] == pytest.approx(radius, rel=0.02)
     assert [p["point"][1], p["point"][2]] == pytest.approx([y, 20.0 + radius - depth], abs=0.02 * radius)
     assert idealize.make_solid(layer).solid
