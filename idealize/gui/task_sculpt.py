@@ -224,8 +224,8 @@ class SculptPanel:
                 self.sculptor_stale = False
             step = self.stroke_step([point.tolist()], [direction.tolist()])
             self.sculptor.begin(step["brush"], point, direction, radius=step["radius"], strength=step["strength"])
-        except Exception as error:  # the stroke is still stored (and replayed) on release: said there
-            self.sculptor = None
+        except Exception as error:  # the stroke is dropped on release, and said so
+            self.sculptor, self.stroke = None, None
             self.form.status.setText("Cannot sculpt here: %s" % error)
             return
         # The layer is hidden while the clay shows: not left highlighted as the pointer found it.
