@@ -139,6 +139,30 @@ def run():
     result["deferred"].update(mesh_state(layer), steps_after_close=len(doc.UndoNames) - steps,
                               undo_name=doc.UndoNames[0] if doc.UndoNames else None,
                               edits=len(json.loads(layer.Edits or "[]")), layer_shown=layer.ViewObject.Visibility)
+
+    # Off for one stroke, then on again for the next: both are stored, in the order they were made.
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(doc.Name, layer.Name)
+    Gui.runCommand("Idealize_Sculpt")
+    wait(0.5)
+    panel = task_sculpt.active_panel
+    for checked, y in ((False, 10), (True, 30)):
+        panel.form.reidealize.setChecked(checked)
+        drag = [screen((40 + 10 * t / 10, y, 20)) for t in range(11)]
+        send(QtCore.QEvent.MouseButtonPress, drag[0], QtCore.Qt.LeftButton)
+        for point in drag[1:]:
+            send(QtCore.QEvent.MouseMove, point, QtCore.Qt.LeftButton)
+        send(QtCore.QEvent.MouseButtonRelease, drag[-1], QtCore.Qt.NoButton)
+        wait(0.3)
+    for _ in range(600):
+        if not panel.busy:
+            break
+        wait(0.05)
+    edits = json.loads(layer.Edits or "[]")
+    result["switched"] = {"waiting": len(panel.pending), "edits": len(edits),
+                          "last_two": [[s["points"][0][1] for s in e["strokes"]] for e in edits[-2:]]}
+    panel.close()
+    wait(0.5)
 '''
 
 
@@ -197,3 +221,10 @@ def test_with_reidealization_off_the_strokes_are_one_step_when_the_panel_closes(
     assert deferred["steps_after_close"] == 1 and deferred["undo_name"] == "Sculpt"
     assert deferred["edits"] == 2 and deferred["layer_shown"]  # the stroke before, and these two as one
     assert deferred["all_features"] > redone["all_features"]
+
+
+def test_a_stroke_made_with_reidealization_off_is_stored_before_the_next_one_with_it_on(sculpt_run):
+    switched, deferred = sculpt_run["switched"], sculpt_run["deferred"]
+    assert switched["waiting"] == 0 and switched["edits"] == deferred["edits"] + 2
+    first, second = switched["last_two"]
+    assert len(first) == len(second) == 1 and first[0] < 20 < second[0]  # made at y 10, then at y 30

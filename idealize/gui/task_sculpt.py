@@ -271,6 +271,9 @@ class SculptPanel:
             self.pending.append(one)
             self.form.status.setText("%d strokes waiting: re-idealized when the panel closes." % len(self.pending))
             return
+        if self.pending:  # made with re-idealization off, before this one: stored first, as one step
+            self.queue.append({"op": "sculpt", "strokes": self.pending})
+            self.pending = []
         self.queue.append({"op": "sculpt", "strokes": [one]})
         self.start_next()
 
