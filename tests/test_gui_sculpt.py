@@ -115,23 +115,31 @@ def run():
     result["redone"] = mesh_state(layer)
 
     # Re-idealization off: the strokes show as clay and are applied as one step when the panel closes.
-    Gui.Selection.clearSelection()
-    Gui.Selection.addSelection(doc.Name, layer.Name)
-    Gui.runCommand("Idealize_Sculpt")
-    wait(0.5)
-    panel = task_sculpt.active_panel
-    panel.form.reidealize.setChecked(False)
-    panel.form.brush.setCurrentIndex(panel.form.brush.findData("draw"))
-    panel.form.radius.setValue(6.0)
-    panel.form.strength.setValue(1.0)
-    steps = len(doc.UndoNames)
-    for y in (10, 30):
-        drag = [screen((12 + 10 * t / 10, y, 20)) for t in range(11)]
+    def open_panel():
+        Gui.Selection.clearSelection()
+        Gui.Selection.addSelection(doc.Name, layer.Name)
+        Gui.runCommand("Idealize_Sculpt")
+        wait(0.5)
+        opened = task_sculpt.active_panel
+        opened.form.brush.setCurrentIndex(opened.form.brush.findData("draw"))
+        opened.form.radius.setValue(6.0)
+        opened.form.strength.setValue(1.0)
+        return opened
+
+    def drag_along(x, y):
+        """A drag of 10 mm along x on the top face, from (x, y)."""
+        drag = [screen((x + 10 * t / 10, y, 20)) for t in range(11)]
         send(QtCore.QEvent.MouseButtonPress, drag[0], QtCore.Qt.LeftButton)
         for point in drag[1:]:
             send(QtCore.QEvent.MouseMove, point, QtCore.Qt.LeftButton)
         send(QtCore.QEvent.MouseButtonRelease, drag[-1], QtCore.Qt.NoButton)
         wait(0.3)
+
+    panel = open_panel()
+    panel.form.reidealize.setChecked(False)
+    steps = len(doc.UndoNames)
+    for y in (10, 30):
+        drag_along(12, y)
     result["deferred"] = {"shown": panel.preview.shown, "steps_before_close": len(doc.UndoNames) - steps,
                           "waiting": len(panel.pending)}
     panel.close()
@@ -141,19 +149,10 @@ def run():
                               edits=len(json.loads(layer.Edits or "[]")), layer_shown=layer.ViewObject.Visibility)
 
     # Off for one stroke, then on again for the next: both are stored, in the order they were made.
-    Gui.Selection.clearSelection()
-    Gui.Selection.addSelection(doc.Name, layer.Name)
-    Gui.runCommand("Idealize_Sculpt")
-    wait(0.5)
-    panel = task_sculpt.active_panel
+    panel = open_panel()
     for checked, y in ((False, 10), (True, 30)):
         panel.form.reidealize.setChecked(checked)
-        drag = [screen((40 + 10 * t / 10, y, 20)) for t in range(11)]
-        send(QtCore.QEvent.MouseButtonPress, drag[0], QtCore.Qt.LeftButton)
-        for point in drag[1:]:
-            send(QtCore.QEvent.MouseMove, point, QtCore.Qt.LeftButton)
-        send(QtCore.QEvent.MouseButtonRelease, drag[-1], QtCore.Qt.NoButton)
-        wait(0.3)
+        drag_along(40, y)
     for _ in range(600):
         if not panel.busy:
             break
