@@ -90,7 +90,6 @@ class Preview:
         self.node = coin.SoSeparator()
         hints = coin.SoShapeHints()
         hints.vertexOrdering = coin.SoShapeHints.COUNTERCLOCKWISE
-        hints.shapeType = coin.SoShapeHints.SOLID  # closed: faces turned away are not drawn
         self.coordinates = coin.SoCoordinate3()
         self.groups = coin.SoGroup()  # a colour and the faces of that colour, per colour
         for child in (hints, self.coordinates, self.groups):

@@ -20,14 +20,7 @@ FeatureTables feature_tables(const TriangleMesh& mesh, const std::vector<int>& l
   FeatureTables tables;
   tables.adjacent = adjacent_pairs(mesh, topology, labels);
 
-  const Eigen::VectorXd area = face_areas(mesh);
-  tables.area.assign(num_features, 0.0);
-  tables.triangles.assign(num_features, 0);
-  for (int f = 0; f < nf; ++f)
-    if (labels[f] >= 0) {
-      tables.area[labels[f]] += area[f];
-      ++tables.triangles[labels[f]];
-    }
+  label_sums(face_areas(mesh), labels, num_features, tables.area, tables.triangles);
 
   // Each vertex's distinct features, counted per feature, then placed by feature (a counting sort:
   // vertices come in order, so within a feature they stay sorted).

@@ -109,16 +109,25 @@ void compact_features(std::vector<int>& labels, std::vector<Feature>& features) 
   features = std::move(kept);
 }
 
-void count_faces(const Eigen::VectorXd& area, const std::vector<int>& labels, std::vector<Feature>& features) {
-  for (Feature& feature : features) {
-    feature.area = 0.0;
-    feature.triangles = 0;
-  }
+void label_sums(const Eigen::VectorXd& area, const std::vector<int>& labels, int count, std::vector<double>& sums,
+                std::vector<int>& triangles) {
+  sums.assign(count, 0.0);
+  triangles.assign(count, 0);
   for (size_t f = 0; f < labels.size(); ++f)
     if (labels[f] >= 0) {
-      features[labels[f]].area += area[f];
-      ++features[labels[f]].triangles;
+      sums[labels[f]] += area[f];
+      ++triangles[labels[f]];
     }
+}
+
+void count_faces(const Eigen::VectorXd& area, const std::vector<int>& labels, std::vector<Feature>& features) {
+  std::vector<double> sums;
+  std::vector<int> triangles;
+  label_sums(area, labels, static_cast<int>(features.size()), sums, triangles);
+  for (size_t p = 0; p < features.size(); ++p) {
+    features[p].area = sums[p];
+    features[p].triangles = triangles[p];
+  }
 }
 
 }  // namespace idealize

@@ -100,7 +100,12 @@ std::vector<std::pair<int, int>> adjacent_pairs(const TriangleMesh& mesh, const 
 // Drops features left without faces and renumbers the rest in order.
 void compact_features(std::vector<int>& labels, std::vector<Feature>& features);
 
-// Area and triangle count of each feature from the labels.
+// The area and triangle count of each of `count` labels (faces labelled -1 count for none), from
+// each face's `area`.
+void label_sums(const Eigen::VectorXd& area, const std::vector<int>& labels, int count, std::vector<double>& sums,
+                std::vector<int>& triangles);
+
+// Area and triangle count of each feature from the labels (label_sums).
 void count_faces(const Eigen::VectorXd& area, const std::vector<int>& labels, std::vector<Feature>& features);
 
 }  // namespace idealize

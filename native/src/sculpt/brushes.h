@@ -68,7 +68,6 @@ class Stroke {
   void extend(const Eigen::Vector3d& point, const Eigen::Vector3d& view);
   // Ends the stroke: a grab's mesh catches up (remeshed around what it moved). Returns the report.
   StrokeReport finish();
-  const StrokeReport& report() const { return report_; }
 
  private:
   void dab(const Eigen::Vector3d& centre, const Eigen::Vector3d& view);
