@@ -12,6 +12,7 @@ from ..freecad import layer_object
 from ..freecad.mesh import FACE_COLORS, SURFACE_COLORS, deviation_colors
 from ..progress import Cancelled
 from . import icon
+from .feature_highlight import FeatureHighlight, install as install_highlight_observer
 from .progress import run_with_progress
 
 
@@ -67,6 +68,17 @@ def refresh_colors(vobj):
         vobj.setPropertyStatus("Coloring", "-NoModify")
 
 
+def picked_facet(picked, facets):
+    """The triangle index of a Coin pick (a pivy SoPickedPoint) on a mesh of `facets` triangles, or
+    None when the pick hit no face of it. The mesh's face set has one face per triangle, in order."""
+    from pivy import coin
+    detail = picked.getDetail()
+    if detail is None or not detail.isOfType(coin.SoFaceDetail.getClassTypeId()):
+        return None
+    index = coin.cast(detail, "SoFaceDetail").getFaceIndex()
+    return index if 0 <= index < facets else None
+
+
 class ViewProviderFeatureLayer:
     def __init__(self, vobj):
         vobj.Proxy = self
@@ -80,6 +92,8 @@ class ViewProviderFeatureLayer:
         self.Object = vobj.Object
         self.legend = None
         self.panel = None
+        self.highlight = FeatureHighlight(vobj)  # the feature under the pointer and the selected ones
+        install_highlight_observer()
 
     def _legend(self, vobj):
         if self.legend is None:
@@ -109,6 +123,8 @@ class ViewProviderFeatureLayer:
             self.update_legend(vobj)
         elif prop == "Visibility":
             self.update_legend(vobj)
+            if getattr(self, "highlight", None) is not None:
+                self.highlight.set_visible(vobj.Visibility)
 
     def finishRestoring(self):
         """After a document is opened: FreeCAD 0.20 restores Coloring before the mesh view can use
@@ -119,12 +135,23 @@ class ViewProviderFeatureLayer:
 
     def updateData(self, obj, prop):
         vobj = obj.ViewObject
+        if prop in ("Mesh", "Labels") and getattr(self, "highlight", None) is not None:
+            self.highlight.layer_changed()
         if prop == FACE_COLORS and vobj.Coloring:
             # The mesh view reads the colours when Coloring is switched on, not when they change.
             vobj.Coloring = False
             vobj.Coloring = True
         elif prop == "VertexDeviation" and getattr(vobj, "ColorBy", None) == "Deviation":
             self.update_legend(vobj)
+
+    def getElementPicked(self, picked):
+        """The facet under the pointer, "FacetN": a click on the layer selects that face (and so its
+        feature). FreeCAD 0.20's mesh view provider names no facets (its pick is the whole object,
+        "Main")."""
+        facet = picked_facet(picked, self.Object.Mesh.CountFacets)
+        if facet is None:
+            raise NotImplementedError  # not a face of the mesh: FreeCAD's own answer
+        return "Facet%d" % facet
 
     def getIcon(self):
         return icon("Idealize_SegmentIdealize")
