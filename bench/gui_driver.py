@@ -32,9 +32,10 @@ os._exit(0)
 '''
 
 
-# Synthetic mouse events on the 3D view, for the driver scripts that drag in it (a driver that uses
-# them includes this text): mouse_events(view) gives screen(point) -> the widget position of a 3D
-# point, and send(kind, position, buttons) -> that event sent to the view's viewport.
+# Synthetic mouse events on the 3D view, for the driver scripts that click and drag in it (a driver
+# that uses them includes this text): mouse_events(view) gives screen(point) -> the widget position
+# of a 3D point, and send(kind, position, buttons) -> that event sent to the view's viewport;
+# click_feature(view, layer, feature) clicks on a feature where it shows.
 MOUSE = r'''
 
 def mouse_events(view):
@@ -52,6 +53,47 @@ def mouse_events(view):
         QtGui.QApplication.sendEvent(widget, event)
         QtGui.QApplication.processEvents()
     return screen, send
+
+
+def click_feature(view, obj, feature):
+    """Click, as a user does, on feature `feature` of the feature layer `obj` where it shows: the
+    pointer moves to the centre of one of its facets that faces the viewer and that nothing hides
+    (the point under that pixel is that centre), and once the face highlighted under the pointer is
+    the feature's, presses and releases the left button there.
+    Returns the clicked 3D point, or None when no facet of the feature shows."""
+    import numpy as np
+    from PySide import QtCore
+    screen, send = mouse_events(view)
+    points, facets = obj.Mesh.Topology
+    V = np.array([tuple(p) for p in points])
+    F = np.array(facets)[np.asarray(obj.Labels) == feature]
+    if not len(F):
+        return None
+    normal = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    area = np.linalg.norm(normal, axis=1)
+    facing = -(normal @ np.array(tuple(view.getViewDirection()))) / np.maximum(area, 1e-300)
+    centres = V[F].mean(axis=1)
+    size = np.linalg.norm(np.ptp(V, axis=0))
+    for i in np.argsort(-(facing * np.sqrt(area)))[:200]:
+        if facing[i] <= 0.2:  # seen edge-on or from behind
+            break
+        sx, sy = view.getPointOnScreen(App.Vector(*centres[i]))
+        info = view.getObjectInfo((int(sx), int(sy)))
+        if not info or info.get("Object") != obj.Name:
+            continue
+        if np.linalg.norm(np.array([info["x"], info["y"], info["z"]]) - centres[i]) > 2e-3 * size:
+            continue  # hidden behind another face
+        position = screen(centres[i])
+        send(QtCore.QEvent.MouseMove, position, QtCore.Qt.NoButton)
+        # As a user does: click once the highlight under the pointer is the feature's.
+        hovered = Gui.Selection.getPreselection()
+        names = hovered.SubElementNames if hovered.Object == obj else ()
+        if len(names) != 1 or not names[0].startswith("Facet") or obj.Labels[int(names[0][5:])] != feature:
+            continue
+        send(QtCore.QEvent.MouseButtonPress, position, QtCore.Qt.LeftButton)
+        send(QtCore.QEvent.MouseButtonRelease, position, QtCore.Qt.NoButton)
+        return [float(c) for c in centres[i]]
+    return None
 '''
 
 

@@ -191,3 +191,46 @@ def test_a_repeated_triangle_of_the_input_does_not_stop_an_edit():
     assert edited.remeshing_problem is None
     check_exact(edited, 6)
     assert idealize.make_solid(edited).volume == pytest.approx(60 * 40 * 25, rel=1e-6)
+
+
+CORNER_BALL_EDITS = r'''
+import sys
+sys.path[:0] = [REPO, REPO + "/tests"]
+import shapes
+_, Part, _ = shapes.freecad()
+from idealize import edit
+box = Part.makeBox(60, 40, 30)
+layer, _ = shapes.quality_layer(box.makeFillet(5, box.Edges))
+outcomes = []
+for plane in [f["id"] for f in layer.features if f["type"] == "plane"]:
+    for distance in (10.0, -10.0, 60.0):
+        try:
+            edit.push_pull(layer, plane, distance)
+            outcomes.append("done")
+        except edit.EditConflict:
+            outcomes.append("refused")
+for fillet in [f["id"] for f in layer.features if f["type"] == "cylinder"][:2]:
+    try:
+        edit.set_parameter(layer, fillet, "radius", 6.0, keep={"equal_radius": False})
+        outcomes.append("done")
+    except edit.EditConflict:
+        outcomes.append("refused")
+print(len(outcomes), "edits:", sorted(set(outcomes)))
+'''
+
+
+@needs_freecad
+def test_editing_a_box_with_corner_balls_never_crashes(tmp_path):
+    """Regression: pushing a plane beside a corner ball (and a fillet's radius alone) killed the
+    process in CGAL's tangential relaxation, reading past its arrays at a vertex whose triangles were
+    all degenerate. Every edit must end in a result or an EditConflict; run apart, so that a crash is
+    a failure here and not the end of the test run."""
+    import os
+    import subprocess
+    import sys
+    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    script = tmp_path / "corner_balls.py"
+    script.write_text("REPO = %r\n" % repo + CORNER_BALL_EDITS)
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=1200)
+    assert run.returncode == 0, "the edits crashed (exit %d): %s" % (run.returncode, run.stderr[-2000:])
+    assert run.stdout.startswith("20 edits:")

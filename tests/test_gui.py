@@ -129,6 +129,21 @@ def shoot(key):
     view.saveImage(CONFIG[key], 800, 600, "White")
 
 
+def show_only(obj):
+    """Show `obj` alone in the view, as a user does (Space on the tree's items) to click on it."""
+    for other in obj.Document.Objects:
+        if other.ViewObject is not None and other is not obj:
+            other.ViewObject.Visibility = False
+    obj.ViewObject.Visibility = True
+
+
+def selected_features(layer):
+    """The features of the layer's facets that are selected (what a click selected)."""
+    labels = layer.Labels
+    return sorted({labels[int(name[len("Facet"):])] for entry in Gui.Selection.getSelectionEx()
+                   if entry.Object == layer for name in entry.SubElementNames if name.startswith("Facet")})
+
+
 def run_on(doc, obj, command):
     """Run a command with obj selected; the objects it added. Records, per run, how many objects
     it added and what it left selected in result["selected_after"][command]."""
@@ -157,7 +172,7 @@ def first_visible(kind, label=""):
         if isinstance(widget, kind) and widget.isVisible() and label in getattr(widget, "labelText", str)():
             return widget
     return None
-'''
+''' + gui_driver.MOUSE  # clicks and drags at pixel positions, as a user makes them
 
 # The script run() in FreeCAD's GUI.
 DRIVER = HELPERS + r'''
@@ -274,14 +289,16 @@ def run():
         base = type_color_counts(layer.FaceColors)
         result["highlight"] = {"cylinder_facets": labels.count(cylinder), "bright": base}
         panel.form.grab().save(CONFIG["screenshot_panel"])
-        # A click on a plane facet in the view selects that plane's row.
-        plane_facet = next(i for i, l in enumerate(labels)
-                           if table.item([int(table.item(r, 0).text()) for r in range(table.rowCount())].index(l),
-                                         1).text() == "plane")
-        Gui.Selection.addSelection(doc.Name, layer.Name, "Facet%d" % plane_facet)
+        # A click on a plane in the view selects that plane's row.
+        view = Gui.ActiveDocument.ActiveView
+        view.viewIsometric()
+        view.fitAll()
+        wait(0.3)
+        planes = [int(table.item(r, 0).text()) for r in range(table.rowCount()) if table.item(r, 1).text() == "plane"]
+        clicked = next((p for p in planes if click_feature(view, layer, p) is not None), None)
         Gui.updateGui()
         rows = table.selectionModel().selectedRows()
-        result["row_of_facet"] = [int(table.item(rows[0].row(), 0).text()) if rows else None, labels[plane_facet]]
+        result["row_of_facet"] = [int(table.item(rows[0].row(), 0).text()) if rows else None, clicked]
         panel.form.optionsToggle.setChecked(True)
         result["options_shown"] = panel.form.options.isVisible()
         panel.reject()
@@ -555,6 +572,7 @@ def test_task_panel(gui_result):
     highlight = result["highlight"]
     assert highlight["bright"] == {"cylinder": highlight["cylinder_facets"],
                                    "other": result["source_before"][1] - highlight["cylinder_facets"]}
+    assert result["row_of_facet"][1] is not None, "no plane could be clicked"
     assert result["row_of_facet"][0] == result["row_of_facet"][1]
     assert result["panel_closed"] is True
     assert result["colors_after_panel"] == result["idealize_type_colors"]

@@ -29,8 +29,15 @@ def run():
     result["before"] = {"volume": solid.Shape.Volume, "faces": len(solid.Shape.Faces)}
     table = json.loads(layer.FeatureTable)
     wall = [f["id"] for f in table["features"] if f["type"] == "cylinder"][0]
+    result["wall"] = wall
     Gui.Selection.clearSelection()
-    Gui.Selection.addSelection(doc.Name, layer.Name, "Facet%d" % list(layer.Labels).index(wall))
+    show_only(layer)  # Make B-rep solid showed the solid in its place
+    view = Gui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    view.fitAll()
+    wait(0.3)
+    result["clicked"] = click_feature(view, layer, wall) is not None
+    result["selected_feature"] = selected_features(layer)
     Gui.runCommand("Idealize_PushPull")
     wait(0.5)
     form = Gui.getMainWindow().findChild(QtGui.QWidget, "PushPull")
@@ -67,6 +74,7 @@ def depth_run(tmp_path_factory):
 
 
 def test_push_pull_offers_a_hole_depth_and_makes_it_through_in_one_undo_step(depth_run):
+    assert depth_run["clicked"] and depth_run["selected_feature"] == [depth_run["wall"]]
     assert depth_run["panel_found"]
     assert depth_run["depth_shown"] == pytest.approx(6.0, abs=1e-3)
     assert depth_run["preview"].startswith("Preview")

@@ -41,12 +41,19 @@ def run():
     top = [f["id"] for f in table["features"] if f["type"] == "plane" and f["params"]["normal"][2] > 0.99
            and abs(f["params"]["point"][2] - 20) < 1e-6][0]
     CONFIG_TOP.append(top)
+    result["top"] = [top]
     result["before"] = layer_state(doc, layer, solid)
 
-    # Select one facet of the top face in the view, as a click does, and run the command.
-    facet = list(layer.Labels).index(top)
+    # A click on the top face in the view selects it; the command works on its feature.
     Gui.Selection.clearSelection()
-    Gui.Selection.addSelection(doc.Name, layer.Name, "Facet%d" % facet)
+    show_only(layer)  # Make B-rep solid showed the solid in its place
+    view = Gui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    view.fitAll()
+    wait(0.3)
+    result["push_pull_active_before_click"] = Gui.Command.get("Idealize_PushPull").isActive()
+    result["clicked"] = click_feature(view, layer, top) is not None
+    result["selected_feature"] = selected_features(layer)
     result["layer_visible_before"] = layer.ViewObject.Visibility
     graph = Gui.ActiveDocument.ActiveView.getSceneGraph()
     children = graph.getNumChildren()
@@ -75,6 +82,13 @@ def run():
     wait(1.5)
     result["conflict"] = {"status": form.findChild(QtGui.QLabel, "status").text(),
                           "added_nodes": graph.getNumChildren() - children}
+    # OK on it: refused with a message, the panel stays, and the document has no new undo step.
+    undo_refused, boxes = len(doc.UndoNames), len(result["error_boxes"])
+    click_ok()
+    wait(0.5)
+    result["refused_ok"] = {"undo_steps": len(doc.UndoNames) - undo_refused, "boxes": result["error_boxes"][boxes:],
+                            "dialog_open": bool(Gui.Control.activeDialog()), "modified": doc.Modified}
+    del result["error_boxes"][boxes:]
     form.findChild(QtGui.QDoubleSpinBox, "value").setValue(5.0)
     wait(1.5)
     undo_before = len(doc.UndoNames)
@@ -122,6 +136,12 @@ def test_dragging_the_arrow_sets_the_offset(push_pull_run):
     assert push_pull_run["dragged_value"] == pytest.approx(3.0, abs=1e-3)
 
 
+def test_a_click_on_the_face_selects_its_feature_and_enables_the_command(push_pull_run):
+    assert not push_pull_run["push_pull_active_before_click"]
+    assert push_pull_run["clicked"]
+    assert push_pull_run["selected_feature"] == push_pull_run["top"]
+
+
 def test_the_command_opens_the_panel_on_the_selected_face(push_pull_run):
     assert push_pull_run["dialog_open"] and push_pull_run["panel_found"]
     assert ", plane: normal (0, 0, 1), offset 20" in push_pull_run["feature_text"]
@@ -134,6 +154,12 @@ def test_the_panel_previews_the_edit_and_names_a_conflict(push_pull_run):
     conflict = push_pull_run["conflict"]
     assert conflict["status"].startswith("Cannot apply") and "feature" in conflict["status"]
     assert conflict["added_nodes"] == 1  # the preview went, the arrow stays
+
+
+def test_a_refused_ok_keeps_the_panel_and_adds_no_undo_step(push_pull_run):
+    refused = push_pull_run["refused_ok"]
+    assert refused["undo_steps"] == 0 and refused["dialog_open"]
+    assert len(refused["boxes"]) == 1 and "feature" in refused["boxes"][0]
 
 
 def test_ok_edits_the_layer_and_regenerates_the_solid_in_one_undo_step(push_pull_run):

@@ -25,9 +25,20 @@ def state(doc, layer, solid):
 def select_boss_wall(doc, layer):
     table = json.loads(layer.FeatureTable)
     walls = [f["id"] for f in table["features"] if f["type"] == "cylinder"]
-    Gui.Selection.clearSelection()
-    Gui.Selection.addSelection(doc.Name, layer.Name, "Facet%d" % list(layer.Labels).index(walls[0]))
+    click_wall(layer, walls[0])
     return walls
+
+
+def click_wall(layer, wall):
+    """Select `wall` by a click where it shows in an isometric view; records what was selected."""
+    Gui.Selection.clearSelection()
+    show_only(layer)  # Make B-rep solid showed the solid in its place
+    view = Gui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    view.fitAll()
+    wait(0.3)
+    click_feature(view, layer, wall)
+    result.setdefault("clicked", []).append([wall, selected_features(layer)])
 
 
 def run():
@@ -92,8 +103,7 @@ def run():
 
     # Delete the copy: its wall is the second cylinder now.
     walls = select_boss_wall(doc, layer)
-    Gui.Selection.clearSelection()
-    Gui.Selection.addSelection(doc.Name, layer.Name, "Facet%d" % list(layer.Labels).index(walls[-1]))
+    click_wall(layer, walls[-1])
     Gui.runCommand("Idealize_DeleteFeature")
     wait(1.5)
     click_ok()
@@ -123,8 +133,7 @@ def run():
     result["notch_before"] = state(doc, layer, solid)
     table = json.loads(layer.FeatureTable)
     floor = [f["id"] for f in table["features"] if f["type"] == "plane" and abs(f["params"]["point"][2] - 14) < 1e-6][0]
-    Gui.Selection.clearSelection()
-    Gui.Selection.addSelection(doc.Name, layer.Name, "Facet%d" % list(layer.Labels).index(floor))
+    click_wall(layer, floor)
     Gui.runCommand("Idealize_DeleteFeature")
     wait(1.5)
     form = Gui.getMainWindow().findChild(QtGui.QWidget, "FeatureGroup")
@@ -156,6 +165,8 @@ def boss_volume():
 
 def test_the_panel_shows_the_group_and_refuses_a_place_off_the_plate(groups_run):
     assert groups_run["panel_found"]
+    for wall, selected in groups_run["clicked"]:  # every feature was selected by a click on it
+        assert selected == [wall]
     assert groups_run["ticked"] >= 2  # the boss's wall and top, and the tessellation's rim facets if any
     assert "on feature" in groups_run["group_text"]
     assert groups_run["highlight_nodes"] == 1  # the highlighted layer replaces the object in the view

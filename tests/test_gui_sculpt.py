@@ -10,7 +10,7 @@ import pytest
 
 import test_gui as gui
 
-DRIVER = gui.HELPERS + gui.gui_driver.MOUSE + r'''
+DRIVER = gui.HELPERS + r'''
 
 
 def mesh_state(layer):

@@ -49,6 +49,89 @@ struct OntoFeatures {
   }
 };
 
+Eigen::Vector3d vec(const Point& p) { return Eigen::Vector3d(p.x(), p.y(), p.z()); }
+
+// The cross product of the edges of face `f` (twice its area along its normal).
+Eigen::Vector3d face_cross(const SurfaceMesh& sm, FaceIndex f) {
+  const auto h = sm.halfedge(f);
+  const Eigen::Vector3d a = vec(sm.point(sm.source(h))), b = vec(sm.point(sm.target(h))),
+                        c = vec(sm.point(sm.target(sm.next(h))));
+  return (b - a).cross(c - a);
+}
+
+// True when no triangle around `v` is degenerate or turned against its normal in `before`
+// (the triangles around v, in CGAL's order, with their cross products before the move).
+bool star_keeps_orientation(const SurfaceMesh& sm, const std::vector<std::pair<FaceIndex, Eigen::Vector3d>>& before) {
+  for (const auto& [f, was] : before) {
+    const Eigen::Vector3d now = face_cross(sm, f);
+    if (now.squaredNorm() == 0.0 || now.dot(was) <= 0.0) return false;
+  }
+  return true;
+}
+
+// Tangential relaxation of the vertices of `faces` (Botsch & Kobbelt 2004, section 4): an
+// interior vertex moves to the mean of its neighbours, less the move along its normal; a vertex
+// on one border between two features (two constrained edges meeting at more than 120 degrees: not a
+// corner of the border) moves along it, halfway to the mean of its two border neighbours, when
+// `along_borders`. Each vertex is then projected onto its features' surfaces. A move that would
+// make a triangle around the vertex degenerate or turn it over is halved, up to five times, and
+// otherwise not made (as CGAL's relaxation does). Vertices flagged in `fixed` stay.
+//
+// CGAL 5.5's own tangential_relaxation is not used: at a vertex whose triangles are all
+// degenerate it looks up the edge of a null halfedge (check_normals in tangential_relaxation.h)
+// and reads outside its arrays, a segmentation fault that killed FreeCAD on corner balls.
+// Here every lookup is of an existing element, and degenerate triangles only refuse a move.
+void relax_tangentially(SurfaceMesh& sm, const std::vector<FaceIndex>& faces,
+                        const SurfaceMesh::Property_map<SurfaceMesh::Edge_index, bool>& constrained_edge,
+                        const SurfaceMesh::Property_map<VertexIndex, bool>& fixed, const OntoFeatures& project,
+                        bool along_borders) {
+  std::vector<VertexIndex> vertices;
+  for (FaceIndex f : faces)
+    for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) vertices.push_back(v);
+  std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  std::vector<std::pair<VertexIndex, Eigen::Vector3d>> moves;  // computed from the positions before any move
+  for (VertexIndex v : vertices) {
+    if (fixed[v] || sm.is_isolated(v)) continue;
+    const Eigen::Vector3d p = vec(sm.point(v));
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
+    std::vector<Eigen::Vector3d> border;
+    int neighbours = 0;
+    for (auto h : CGAL::halfedges_around_target(sm.halfedge(v), sm)) {
+      const Eigen::Vector3d u = vec(sm.point(sm.source(h)));
+      if (constrained_edge[sm.edge(h)] || sm.is_border(sm.edge(h))) border.push_back(u);
+      sum += u;
+      ++neighbours;
+      if (!sm.is_border(h)) normal += face_cross(sm, sm.face(h));
+    }
+    if (border.empty() && neighbours > 0 && normal.squaredNorm() > 0.0) {
+      const Eigen::Vector3d mean = sum / neighbours, n = normal.normalized();
+      moves.emplace_back(v, mean + (p - mean).dot(n) * n);
+    } else if (along_borders && border.size() == 2) {
+      const Eigen::Vector3d a = border[0] - p, b = border[1] - p;
+      const double lengths = a.norm() * b.norm();
+      // cos < -1/2: the border runs on through v (an angle over 120 degrees, CGAL's bound).
+      if (lengths > 0.0 && a.dot(b) < -0.5 * lengths) moves.emplace_back(v, 0.5 * p + 0.25 * (border[0] + border[1]));
+    }
+  }
+  std::vector<std::pair<FaceIndex, Eigen::Vector3d>> before;
+  for (const auto& [v, target] : moves) {
+    before.clear();
+    for (FaceIndex f : CGAL::faces_around_target(sm.halfedge(v), sm))
+      if (f != SurfaceMesh::null_face()) before.emplace_back(f, face_cross(sm, f));
+    const Point start = sm.point(v);
+    const Eigen::Vector3d move = target - vec(start);
+    bool moved = false;
+    for (double share = 1.0; share > 0.03 && !moved; share *= 0.5) {  // 1, 1/2, ... 1/32: five halvings
+      const Eigen::Vector3d to = vec(start) + share * move;
+      sm.point(v) = Point(to.x(), to.y(), to.z());
+      sm.point(v) = project(v);
+      moved = star_keeps_orientation(sm, before);
+    }
+    if (!moved) sm.point(v) = start;
+  }
+}
+
 SurfaceMesh to_surface_mesh(const TriangleMesh& mesh, const std::vector<int>& labels,
                             SurfaceMesh::Property_map<FaceIndex, int>& patch) {
   SurfaceMesh sm;
@@ -116,17 +199,25 @@ RemeshedLayer remesh_adaptive(const TriangleMesh& mesh, const std::vector<int>& 
     for (FaceIndex f : sm.faces())
       if (patch[f] == static_cast<int>(feature)) faces.push_back(f);
     if (faces.empty()) continue;
-    try {
-      PMP::isotropic_remeshing(faces, target_edge_length[feature], sm,
-                               CGAL::parameters::number_of_iterations(static_cast<unsigned int>(iterations))
-                                   .face_patch_map(patch)
-                                   .edge_is_constrained_map(constrained_edge)
-                                   .vertex_is_constrained_map(constrained_vertex)
-                                   .protect_constraints(false)
-                                   .relax_constraints(!keep_others)
-                                   .projection_functor(project));
-    } catch (const std::exception& e) {
-      throw MeshError(std::string("the adaptive remeshing failed: ") + e.what());
+    // A round: CGAL splits, collapses and flips, and projects onto the features; then the
+    // relaxation here (CGAL's is off, see relax_tangentially).
+    for (int round = 0; round < iterations; ++round) {
+      try {
+        PMP::isotropic_remeshing(faces, target_edge_length[feature], sm,
+                                 CGAL::parameters::number_of_iterations(1)
+                                     .number_of_relaxation_steps(0)
+                                     .face_patch_map(patch)
+                                     .edge_is_constrained_map(constrained_edge)
+                                     .vertex_is_constrained_map(constrained_vertex)
+                                     .protect_constraints(false)
+                                     .projection_functor(project));
+      } catch (const std::exception& e) {
+        throw MeshError(std::string("the adaptive remeshing failed: ") + e.what());
+      }
+      faces.clear();
+      for (FaceIndex f : sm.faces())
+        if (patch[f] == static_cast<int>(feature)) faces.push_back(f);
+      relax_tangentially(sm, faces, constrained_edge, constrained_vertex, project, !keep_others);
     }
   }
   sm.collect_garbage();
