@@ -67,8 +67,8 @@ def move(layer, feature_ids, translation, rotation=None, onto=None, keep=None, r
     if _island(layer, ids):
         return _carried(layer, ids, translation, rotation, onto, remesh)
     if rotation is not None or onto is not None:
-        raise ValueError("features %s are not a group on planes: turn them with rotate(), and they stay on "
-                         "their faces" % ids)
+        raise ValueError("features %s are not a group sitting on planes: they move only along their own faces, "
+                         "with no turn and onto no other face" % ids)
     return _deformed(layer, ids, translation, keep, remesh)
 
 

@@ -64,10 +64,11 @@ def regression_inputs():
 
 
 def seed_inputs():
-    # fuzz_sculpt's seeds are byte layouts of strokes on a generated sphere, not meshes: tools/fuzz.sh
-    # (and so tools/test.sh) runs every one of them first, the inputs that once crashed among them.
+    # fuzz_sculpt's and fuzz_edit's seeds are byte layouts of strokes on a generated sphere and of
+    # edits of generated parts, not meshes: tools/fuzz.sh (and so tools/test.sh) runs every one of
+    # them first, the inputs that once crashed among them.
     return sorted(p for p in glob.glob(os.path.join(FUZZ, "corpus", "*", "*"))
-                  if os.path.basename(os.path.dirname(p)) != "fuzz_sculpt")
+                  if os.path.basename(os.path.dirname(p)) not in ("fuzz_sculpt", "fuzz_edit"))
 
 
 def check_no_crash(path):

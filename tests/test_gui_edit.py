@@ -87,7 +87,7 @@ def run():
     click_ok()
     wait(0.5)
     result["refused_ok"] = {"undo_steps": len(doc.UndoNames) - undo_refused, "boxes": result["error_boxes"][boxes:],
-                            "dialog_open": bool(Gui.Control.activeDialog()), "modified": doc.Modified}
+                            "dialog_open": bool(Gui.Control.activeDialog())}
     del result["error_boxes"][boxes:]
     form.findChild(QtGui.QDoubleSpinBox, "value").setValue(5.0)
     wait(1.5)

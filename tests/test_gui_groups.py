@@ -66,6 +66,8 @@ def run():
     result["panel_found"] = form is not None
     if form is None:
         return
+    combo = Gui.getMainWindow().findChild(QtGui.QDockWidget, "Combo View")
+    result["widths"] = {"panel": form.width(), "combo_view": combo.width() if combo is not None else None}
     members = form.findChild(QtGui.QListWidget, "members")
     result["group_text"] = form.findChild(QtGui.QLabel, "group").text()
     result["ticked"] = sum(members.item(i).checkState() == QtCore.Qt.Checked for i in range(members.count()))
@@ -165,6 +167,8 @@ def boss_volume():
 
 def test_the_panel_shows_the_group_and_refuses_a_place_off_the_plate(groups_run):
     assert groups_run["panel_found"]
+    widths = groups_run["widths"]  # the panel fits the combo view (its buttons were cut off)
+    assert widths["combo_view"] is not None and widths["panel"] <= widths["combo_view"]
     for wall, selected in groups_run["clicked"]:  # every feature was selected by a click on it
         assert selected == [wall]
     assert groups_run["ticked"] >= 2  # the boss's wall and top, and the tessellation's rim facets if any

@@ -41,37 +41,67 @@ def edit_step(feature, parameter, value, keep):
             "keep": dict(keep)}
 
 
-def regenerate_solids(obj, layer):
-    """Rebuild the shape of every B-rep solid made from the layer's source (Part::Features with
-    IdealizeSolid linked to it) from the edited `layer`, and its primitives. Returns how many."""
+def solids_of(obj):
+    """The B-rep solids made from the layer object's source: Part::Features with IdealizeSolid
+    linked to it."""
+    if obj.Source is None:
+        return []
+    return [other for other in obj.Document.Objects
+            if hasattr(other, "IdealizeSolid") and getattr(other, "Source", None) == obj.Source]
+
+
+def regenerate_solids(obj, layer, solid=None):
+    """Rebuild the shape of every B-rep solid made from the layer's source (solids_of) from the
+    edited `layer` (its :class:`idealize.Solid` when computed already), and its primitives. Returns
+    how many."""
     count = 0
     if obj.Source is not None:
         group = obj.Document.getObject(obj.Source.Name + "_Primitives")
         if group is not None and group.isDerivedFrom("App::DocumentObjectGroup"):
             freecad_solid.refill_primitives(group, layer)
-    for other in obj.Document.Objects:
-        if hasattr(other, "IdealizeSolid") and getattr(other, "Source", None) == obj.Source:
+    for other in solids_of(obj):
+        if solid is None:
             solid = make_solid(layer)
-            other.Shape = solid.part_shape()
-            other.IdealizeSolid = bool(solid.solid)
-            other.IdealizeProblems = [("feature %d: " % f if f >= 0 else "") + m for f, m in solid.problems]
-            if other.ViewObject is not None:
-                other.ViewObject.DiffuseColor = freecad_solid.face_colors(other.Shape)
-            count += 1
+        other.Shape = solid.part_shape()
+        other.IdealizeSolid = bool(solid.solid)
+        other.IdealizeProblems = [("feature %d: " % f if f >= 0 else "") + m for f, m in solid.problems]
+        if other.ViewObject is not None:
+            other.ViewObject.DiffuseColor = freecad_solid.face_colors(other.Shape)
+        count += 1
     return count
 
 
 def apply_in_one_step(obj, step, title, edited=None):
     """Add the edit `step` to the layer object as one undo step named `title`, regenerating the
     solids made from its source. `edited`: the step's result, computed already (see
-    layer_object.add_edit). Returns (the edited layer, solids regenerated), or None when it failed:
-    the transaction is then aborted and the error reported."""
+    layer_object.add_edit). Otherwise the edit and the solids are computed first in a worker thread
+    (a progress dialog with Cancel after half a second), and the document is changed only once they
+    are: a refused or cancelled edit adds no undo step. Returns (the edited layer, solids
+    regenerated), or None when it failed or was cancelled (the error reported)."""
     from .commands import report_error
+    from .progress import run_with_progress
+    from ..progress import Cancelled
+    solid = None
+    if edited is None:
+        inputs = layer_object.edit_inputs(obj)
+        with_solid = bool(solids_of(obj))
+
+        def work(progress):
+            record = layer_object.edit_record(inputs, step)
+            return record, (make_solid(record.layer, progress=progress) if with_solid else None)
+        try:
+            edited, solid = run_with_progress(title, work)
+        except Cancelled:
+            FreeCADGui.getMainWindow().statusBar().showMessage("%s cancelled: the layer is unchanged" % title, 15000)
+            return None
+        except Exception as error:
+            report_error(title, error)
+            return None
     doc = obj.Document
     doc.openTransaction(title)
     try:
         layer = layer_object.add_edit(obj, step, edited)
-        solids = regenerate_solids(obj, layer)
+        solids = regenerate_solids(obj, layer, solid)
         doc.recompute()
         doc.commitTransaction()
     except Exception as error:  # the document must not keep half an edit
