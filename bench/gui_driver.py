@@ -35,7 +35,8 @@ os._exit(0)
 # Synthetic mouse events on the 3D view, for the driver scripts that click and drag in it (a driver
 # that uses them includes this text): mouse_events(view) gives screen(point) -> the widget position
 # of a 3D point, and send(kind, position, buttons) -> that event sent to the view's viewport;
-# click_feature(view, layer, feature) clicks on a feature where it shows.
+# click_feature(view, layer, feature) clicks on a feature where it shows, click_face(view, obj,
+# face) on a face of a Part object.
 MOUSE = r'''
 
 def mouse_events(view):
@@ -93,6 +94,37 @@ def click_feature(view, obj, feature):
         send(QtCore.QEvent.MouseButtonPress, position, QtCore.Qt.LeftButton)
         send(QtCore.QEvent.MouseButtonRelease, position, QtCore.Qt.NoButton)
         return [float(c) for c in centres[i]]
+    return None
+
+
+def click_face(view, obj, face):
+    """Click, as a user does, on face `face` (0-based: Face<face + 1>) of the Part object `obj` where
+    it shows: at a point of a grid over its parameters that lies on the face, that nothing hides,
+    and where the highlight under the pointer is that face. Returns the point, or None."""
+    import numpy as np
+    from PySide import QtCore
+    screen, send = mouse_events(view)
+    shape = obj.Shape.Faces[face]
+    u0, u1, v0, v1 = shape.ParameterRange
+    size = obj.Shape.BoundBox.DiagonalLength
+    for i in range(1, 12):
+        for j in range(1, 12):
+            point = shape.valueAt(u0 + (u1 - u0) * i / 12.0, v0 + (v1 - v0) * j / 12.0)
+            if not shape.isInside(point, 1e-6 * size, False):
+                continue
+            sx, sy = view.getPointOnScreen(point)
+            info = view.getObjectInfo((int(sx), int(sy)))
+            if not info or info.get("Object") != obj.Name or \
+                    (App.Vector(info["x"], info["y"], info["z"]) - point).Length > 2e-3 * size:
+                continue
+            position = screen((point.x, point.y, point.z))
+            send(QtCore.QEvent.MouseMove, position, QtCore.Qt.NoButton)
+            hovered = Gui.Selection.getPreselection()
+            if hovered.Object != obj or tuple(hovered.SubElementNames) != ("Face%d" % (face + 1),):
+                continue
+            send(QtCore.QEvent.MouseButtonPress, position, QtCore.Qt.LeftButton)
+            send(QtCore.QEvent.MouseButtonRelease, position, QtCore.Qt.NoButton)
+            return [point.x, point.y, point.z]
     return None
 '''
 

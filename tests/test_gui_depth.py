@@ -30,14 +30,15 @@ def run():
     table = json.loads(layer.FeatureTable)
     wall = [f["id"] for f in table["features"] if f["type"] == "cylinder"][0]
     result["wall"] = wall
+    # A click on the hole's wall in the solid Make B-rep solid shows: the command edits its feature.
     Gui.Selection.clearSelection()
-    show_only(layer)  # Make B-rep solid showed the solid in its place
     view = Gui.ActiveDocument.ActiveView
     view.viewIsometric()
     view.fitAll()
     wait(0.3)
-    result["clicked"] = click_feature(view, layer, wall) is not None
-    result["selected_feature"] = selected_features(layer)
+    result["solid_visible"] = solid.ViewObject.Visibility and not layer.ViewObject.Visibility
+    result["clicked"] = click_face(view, solid, list(solid.IdealizeFaceFeatures).index(wall)) is not None
+    result["push_pull_active"] = Gui.Command.get("Idealize_PushPull").isActive()
     Gui.runCommand("Idealize_PushPull")
     wait(0.5)
     form = Gui.getMainWindow().findChild(QtGui.QWidget, "PushPull")
@@ -54,10 +55,12 @@ def run():
     value.setValue(25.0)
     wait(2.0)
     result["preview"] = form.findChild(QtGui.QLabel, "status").text()
+    result["solid_hidden_in_preview"] = not solid.ViewObject.Visibility
     click_ok()
     wait(1.0)
     result["through"] = {"volume": solid.Shape.Volume, "faces": len(solid.Shape.Faces), "valid": solid.Shape.isValid(),
-                         "undo_name": doc.UndoNames[0] if doc.UndoNames else None}
+                         "undo_name": doc.UndoNames[0] if doc.UndoNames else None,
+                         "solid_visible": solid.ViewObject.Visibility}
     doc.undo()
     doc.recompute()
     result["undone"] = {"volume": solid.Shape.Volume, "faces": len(solid.Shape.Faces)}
@@ -74,10 +77,11 @@ def depth_run(tmp_path_factory):
 
 
 def test_push_pull_offers_a_hole_depth_and_makes_it_through_in_one_undo_step(depth_run):
-    assert depth_run["clicked"] and depth_run["selected_feature"] == [depth_run["wall"]]
+    assert depth_run["solid_visible"] and depth_run["clicked"] and depth_run["push_pull_active"]
     assert depth_run["panel_found"]
     assert depth_run["depth_shown"] == pytest.approx(6.0, abs=1e-3)
     assert depth_run["preview"].startswith("Preview")
+    assert depth_run["solid_hidden_in_preview"] and depth_run["through"]["solid_visible"]
     blind, through, undone = depth_run["before"], depth_run["through"], depth_run["undone"]
     assert blind["volume"] == pytest.approx(60 * 40 * 10 - math.pi * 16 * 6, rel=1e-5)
     assert through["valid"] and through["undo_name"] == "Push/Pull"

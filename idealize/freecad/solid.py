@@ -151,13 +151,26 @@ def make_solid_object(doc, source_obj, layer=None, solid=None, with_primitives=T
         layer, solid = solid_of_mesh_object(source_obj, layer)
     obj = doc.addObject("Part::Feature", source_obj.Name + "_Solid")
     obj.Label = source_obj.Label + "_Solid"
-    obj.Shape = solid.part_shape()
-    obj.addProperty("App::PropertyBool", "IdealizeSolid", "Idealize", "True: a valid closed solid")
-    obj.addProperty("App::PropertyStringList", "IdealizeProblems", "Idealize", "What failed, per feature")
-    obj.IdealizeSolid = bool(solid.solid)
-    obj.IdealizeProblems = [("feature %d: " % f if f >= 0 else "") + m for f, m in solid.problems]
+    set_solid(obj, solid)
     group = make_primitives(doc, source_obj, layer) if with_primitives else None
     return obj, group, solid
+
+
+def set_solid(obj, solid):
+    """Give a solid object (a Part::Feature) the :class:`idealize.Solid`: its shape, whether it is a
+    valid closed solid, what failed, and the feature of each face (so that a click on a face of the
+    solid is a click on that feature of the layer)."""
+    for kind, name, doc in (("App::PropertyBool", "IdealizeSolid", "True: a valid closed solid"),
+                            ("App::PropertyStringList", "IdealizeProblems", "What failed, per feature"),
+                            ("App::PropertyIntegerList", "IdealizeFaceFeatures",
+                             "The feature of each face (Face1 first), -1 where none")):
+        if not hasattr(obj, name):
+            obj.addProperty(kind, name, "Idealize", doc)
+    obj.setEditorMode("IdealizeFaceFeatures", 2)  # hidden: a list for the editing commands
+    obj.Shape = solid.part_shape()
+    obj.IdealizeSolid = bool(solid.solid)
+    obj.IdealizeProblems = [("feature %d: " % f if f >= 0 else "") + m for f, m in solid.problems]
+    obj.IdealizeFaceFeatures = [int(f) for f in solid.face_features]
 
 
 def face_colors(shape):

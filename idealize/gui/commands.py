@@ -249,20 +249,44 @@ class MakeSolidCommand(_LayerOrMeshCommand):
         _run("Make B-rep solid", "Make B-rep solid", compute, make_result, describe, show)
 
 
-def _selected_layer_feature():
-    """(layer object, feature id, facet) of the one facet of a feature layer selected in the 3D
-    view, or None."""
+def _selected_layer_feature(precise=False):
+    """(layer object, feature id, facet) of the one face selected in the 3D view: a facet of a
+    feature layer, or a face of a B-rep solid made from one (its feature, and that feature's first
+    facet in the layer; with `precise`, its facet nearest the point clicked). None otherwise."""
     selection = FreeCADGui.Selection.getSelectionEx()
-    if len(selection) != 1 or not layer_object.is_feature_layer(selection[0].Object):
+    if len(selection) != 1 or len(selection[0].SubElementNames) != 1:
         return None
-    facets = [name for name in selection[0].SubElementNames if name.startswith("Facet")]
-    if len(facets) != 1:
-        return None
-    obj, facet = selection[0].Object, int(facets[0][len("Facet"):])
-    labels = obj.Labels
-    if not 0 <= facet < len(labels) or labels[facet] < 0:
-        return None
-    return obj, int(labels[facet]), facet
+    obj, element = selection[0].Object, selection[0].SubElementNames[0]
+    if layer_object.is_feature_layer(obj) and element.startswith("Facet"):
+        facet = int(element[len("Facet"):])
+        labels = obj.Labels
+        if not 0 <= facet < len(labels) or labels[facet] < 0:
+            return None
+        return obj, int(labels[facet]), facet
+    if hasattr(obj, "IdealizeFaceFeatures") and element.startswith("Face"):
+        face, features = int(element[len("Face"):]) - 1, obj.IdealizeFaceFeatures
+        layers = [o for o in obj.Document.Objects if layer_object.is_feature_layer(o)
+                  and o.Source is not None and o.Source == getattr(obj, "Source", None)]
+        if not 0 <= face < len(features) or features[face] < 0 or not layers:
+            return None
+        labels = layers[0].Labels  # the layer whose edits regenerate this solid (solids_of)
+        if features[face] not in labels:
+            return None
+        facet = labels.index(features[face])
+        if precise and selection[0].PickedPoints:
+            facet = _facet_near(layers[0], features[face], selection[0].PickedPoints[0])
+        return layers[0], features[face], facet
+    return None
+
+
+def _facet_near(obj, feature, point):
+    """The facet of `feature` of the layer object `obj` whose centre is nearest `point`."""
+    import numpy as np
+    from ..freecad.mesh import mesh_from_freecad
+    mesh = mesh_from_freecad(obj.Mesh)
+    facets = np.flatnonzero(np.asarray(obj.Labels) == feature)
+    centres = mesh.vertices[mesh.faces[facets]].mean(axis=1)
+    return int(facets[np.argmin(np.linalg.norm(centres - np.array(tuple(point)), axis=1))])
 
 
 class PushPullCommand:
@@ -284,7 +308,7 @@ class PushPullCommand:
 
 def _open_panel(title, make):
     """The task panel make(layer object, feature, facet) of the selected face, shown."""
-    selected = _selected_layer_feature()
+    selected = _selected_layer_feature(precise=True)
     if selected is None:
         return
     try:

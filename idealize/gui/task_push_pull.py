@@ -62,9 +62,7 @@ def regenerate_solids(obj, layer, solid=None):
     for other in solids_of(obj):
         if solid is None:
             solid = make_solid(layer)
-        other.Shape = solid.part_shape()
-        other.IdealizeSolid = bool(solid.solid)
-        other.IdealizeProblems = [("feature %d: " % f if f >= 0 else "") + m for f, m in solid.problems]
+        freecad_solid.set_solid(other, solid)
         if other.ViewObject is not None:
             other.ViewObject.DiffuseColor = freecad_solid.face_colors(other.Shape)
         count += 1
@@ -127,6 +125,7 @@ class Preview:
         self.view = FreeCADGui.getDocument(obj.Document.Name).ActiveView
         self.shown = False
         self.layer_visible = obj.ViewObject.Visibility
+        self.solids_hidden = []
 
     def show(self, layer, highlight=None):
         """Draw `layer`, every feature but `highlight` (ids) dimmed when given."""
@@ -162,12 +161,21 @@ class Preview:
         if not self.shown:
             self.view.getSceneGraph().addChild(self.node)
             self.obj.ViewObject.Visibility = False
+            # The solids made from the layer lie where the preview does: hidden while it shows.
+            self.solids_hidden = [o for o in solids_of(self.obj) if o.ViewObject is not None and o.ViewObject.Visibility]
+            for solid in self.solids_hidden:
+                solid.ViewObject.Visibility = False
             self.shown = True
 
     def hide(self):
         if self.shown:
             self.view.getSceneGraph().removeChild(self.node)
             self.obj.ViewObject.Visibility = self.layer_visible
+            for solid in self.solids_hidden:
+                try:
+                    solid.ViewObject.Visibility = True
+                except (ReferenceError, RuntimeError):  # deleted meanwhile
+                    pass
             self.shown = False
 
 
