@@ -234,3 +234,51 @@ def test_editing_a_box_with_corner_balls_never_crashes(tmp_path):
     run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=1200)
     assert run.returncode == 0, "the edits crashed (exit %d): %s" % (run.returncode, run.stderr[-2000:])
     assert run.stdout.startswith("20 edits:")
+
+
+@pytest.fixture(scope="module")
+def corner_balls():
+    """60 x 40 x 30 with every edge rounded (r 5): twelve fillets meeting in eight corner balls."""
+    _, Part, _ = shapes.freecad()
+    box = Part.makeBox(60, 40, 30)
+    return _layer(box.makeFillet(5, box.Edges))
+
+
+def rounded_box(x, y, z, radius):
+    _, Part, _ = shapes.freecad()
+    box = Part.makeBox(x, y, z)
+    return box.makeFillet(radius, box.Edges)
+
+
+@needs_freecad
+@pytest.mark.parametrize("distance", [10.0, -10.0, 60.0])
+def test_a_plane_beside_corner_balls_pushes_exactly(corner_balls, distance):
+    """The balls roll with their fillets (thesis Fig 6.9): the solid is the box built longer."""
+    layer, part = corner_balls
+    side = plane_at(layer, (1, 0, 0), 60)
+    edited = edit.push_pull(layer, side, distance)
+    assert not edited.remeshing_problem
+    solid = check_exact(edited, len(part.Faces))
+    assert solid.volume == pytest.approx(rounded_box(60 + distance, 40, 30, 5).Volume, rel=1e-6)
+    balls = [f for f in edited.features if f["type"] == "sphere"]
+    assert len(balls) == 8 and all(f["params"]["radius"] == pytest.approx(5.0) for f in balls)
+    assert sorted(round(f["params"]["center"][0], 6) for f in balls) == [5.0] * 4 + [55.0 + distance] * 4
+
+
+@needs_freecad
+@pytest.mark.parametrize("radius", [4.0, 6.0])
+def test_equal_fillets_take_their_corner_balls_along(corner_balls, radius):
+    layer, part = corner_balls
+    fillet = cylinders(layer, 5.0)[0]
+    edited = edit.set_parameter(layer, fillet, "radius", radius)
+    solid = check_exact(edited, len(part.Faces))
+    assert solid.volume == pytest.approx(rounded_box(60, 40, 30, radius).Volume, rel=1e-6)
+    assert all(f["params"]["radius"] == pytest.approx(radius) for f in edited.features if f["type"] != "plane")
+
+
+@needs_freecad
+def test_one_fillet_alone_cannot_keep_its_corner_balls(corner_balls):
+    layer, _ = corner_balls
+    fillet = cylinders(layer, 5.0)[0]
+    with pytest.raises(edit.EditConflict, match="sphere"):
+        edit.set_parameter(layer, fillet, "radius", 6.0, keep={"equal_radius": False})

@@ -51,6 +51,32 @@ std::vector<Eigen::Vector3d> spread(std::vector<Eigen::Vector3d> samples, Surfac
 // The rolling radius of `s`: what the contact's residuals subtract.
 double roll_of(const Surface& s) { return s.type == SurfaceType::Torus ? s.minor : s.radius; }
 
+// The nearest point to x on the spine of a round `other` (a cylinder's axis, a torus's centre
+// circle) and the spine's direction there; false for other surfaces (or x on a torus's axis).
+bool spine_foot(const Surface& other, const Eigen::Vector3d& x, Eigen::Vector3d& foot, Eigen::Vector3d& tangent) {
+  if (other.type == SurfaceType::Cylinder) {
+    foot = other.point + (x - other.point).dot(other.axis) * other.axis;
+    tangent = other.axis;
+    return true;
+  }
+  if (other.type != SurfaceType::Torus) return false;
+  Eigen::Vector3d radial = (x - other.point) - (x - other.point).dot(other.axis) * other.axis;
+  if (radial.norm() == 0.0) return false;
+  radial.normalize();
+  foot = other.point + other.radius * radial;
+  tangent = other.axis.cross(radial);
+  return true;
+}
+
+// Whether a ball `roller` sits on the spine of the round `other`: its centre within a millionth of
+// its radius of it. Off the spine by δ, a ball touches at one point, and taking the circle's point
+// instead (contact_point) errs by at most 2δ; the idealization puts the centre there to the
+// rounding of its arithmetic (3e-10 on a 5 mm ball), far below what the layer calls an exact fit.
+bool ball_on_spine(const Surface& roller, const Surface& other, Eigen::Vector3d& foot, Eigen::Vector3d& tangent) {
+  return roller.type == SurfaceType::Sphere && spine_foot(other, roller.point, foot, tangent) &&
+         (roller.point - foot).norm() <= 1e-6 * roller.radius;
+}
+
 // The unknowns of a pose: for a plane its offset along the normal; otherwise a rotation vector (3)
 // about the surface's point and a translation (3); a torus also its major radius; with a free shape
 // also the rolling radius.
@@ -119,7 +145,15 @@ int roller_of(const Surface& a, int ia, const Surface& b, int ib) {
 }
 
 Eigen::Vector3d contact_point(const Surface& roller, const Surface& other, const Eigen::Vector3d& p) {
-  return closest_point(other, spine_point(roller, roller, spine_sample(roller, p)));
+  const Eigen::Vector3d spine = spine_point(roller, roller, spine_sample(roller, p));
+  // A ball on a round's spine touches it along a circle, every point of which is nearest its
+  // centre: the one nearest p.
+  Eigen::Vector3d foot, tangent;
+  if (ball_on_spine(roller, other, foot, tangent)) {
+    const Eigen::Vector3d toward = (p - foot) - (p - foot).dot(tangent) * tangent;
+    if (toward.norm() > 0.0) return foot + roll_of(other) * toward.normalized();
+  }
+  return closest_point(other, spine);
 }
 
 std::vector<Contact> tangent_contacts(const TriangleMesh& mesh, const std::vector<int>& labels,
@@ -150,6 +184,8 @@ std::vector<Contact> tangent_contacts(const TriangleMesh& mesh, const std::vecto
     if (samples.empty()) continue;
     contact.samples = roller.type == SurfaceType::Sphere ? std::vector<Eigen::Vector3d>{Eigen::Vector3d::Zero()}
                                                           : spread(std::move(samples), roller.type, max_samples);
+    Eigen::Vector3d foot, tangent;
+    contact.on_spine = ball_on_spine(roller, other, foot, tangent);
     for (const auto& s : contact.samples) {
       const double d = signed_distance(other, spine_point(roller, roller, s));
       const double side = d < 0.0 ? -1.0 : 1.0;
@@ -163,6 +199,12 @@ std::vector<Contact> tangent_contacts(const TriangleMesh& mesh, const std::vecto
 
 void contact_residuals(const Contact& contact, const Surface& roller_before, const Surface& roller,
                        const Surface& other, std::vector<double>& out) {
+  Eigen::Vector3d foot, tangent;
+  if (contact.on_spine && spine_foot(other, roller.point, foot, tangent)) {
+    const Eigen::Vector3d off = roller.point - foot;  // smooth in the poses, unlike its length
+    out.insert(out.end(), {off.x(), off.y(), off.z(), roll_of(other) - roll_of(roller)});
+    return;
+  }
   for (size_t i = 0; i < contact.samples.size(); ++i) {
     const double d = signed_distance(other, spine_point(roller_before, roller, contact.samples[i]));
     out.push_back(d - contact.sides[i] * roll_of(roller) - contact.offsets[i]);

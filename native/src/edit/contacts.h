@@ -28,6 +28,10 @@ struct Contact {
   // radius, as the layer had it (0 on an exact layer): what the edit keeps.
   std::vector<double> offsets;
   std::vector<double> sides;  // +1 or -1: which side of the other surface the spine lies on
+  // A ball whose centre lies on the other's spine (a corner's ball in a round of its own radius): it
+  // touches along a circle, and what is kept is its centre on that spine and its radius the round's.
+  // (The distance from the round, the usual condition, has a kink there that no solver converges on.)
+  bool on_spine = false;
 };
 
 // The features around each vertex of `mesh` (its faces' labels; -1, a triangle set aside, is no

@@ -284,7 +284,12 @@ std::string inverted_triangles(const TriangleMesh& mesh, const std::vector<int>&
     const int l = labels[f];
     if (l < 0 || !edited[l] || surfaces[l].type == SurfaceType::Freeform) continue;
     const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-    if (sides[l] * (b - a).cross(c - a).dot(surface_normal(surfaces[l], (a + b + c) / 3.0)) < 0.0) ++inverted[l];
+    // Turned over: facing against the feature's side. A triangle whose corners all lie on one border
+    // curve of a round surface (CAD meshers put such triangles at fillets' ends) stands at right
+    // angles to it: its facing is zero up to rounding, and its sign means nothing. A cosine below
+    // -1e-6 (0.00006 degrees past the right angle, a thousand times the rounding's 1e-9) is a turn.
+    const Eigen::Vector3d area = (b - a).cross(c - a);
+    if (sides[l] * area.dot(surface_normal(surfaces[l], (a + b + c) / 3.0)) < -1e-6 * area.norm()) ++inverted[l];
   }
   if (inverted.empty()) return "";
   const auto worst = std::max_element(inverted.begin(), inverted.end(),

@@ -228,24 +228,40 @@ struct Propagator {
     for (size_t f = 0; f < before.size(); ++f)
       if (driven[f] && is_identity(out.motions[f]) && rolling_radius(out.surfaces[f]) != rolling_radius(before[f]))
         edited.push_back(static_cast<int>(f));
+    // A roller that finds no pose in one pass may in the next, once the rollers it rests on moved
+    // (a corner's ball is solved before the fillets of higher ids it sits in): it is refused only
+    // when a pass moves nothing more.
+    std::vector<int> failed;
     for (size_t pass = 0; pass <= edited.size(); ++pass) {
       bool moved_any = false;
+      failed.clear();
       for (int f : edited) {
-        std::vector<const Contact*> walls;
-        for (int c : contacts_of[f])
-          if (contacts[c].roller == f) walls.push_back(&contacts[c]);
+        std::vector<const Contact*> walls = walls_of(f);
         if (walls.empty() || worst(walls) <= settle) continue;
         Surface s;
         Eigen::Isometry3d motion;
         const double left = solve_pose(f, out.surfaces, before, walls, FreeShape::None, length, s, motion);
-        if (left > conflict)
-          refuse(f, walls, "no position of its new radius touches them all (is it larger than its wall?)");
+        if (left > conflict) {
+          failed.push_back(f);
+          continue;
+        }
         out.surfaces[f] = s;
-        out.motions[f] = motion * out.motions[f];
+        out.motions[f] = motion_between(before[f], s);  // as in ring_by_ring: no slide along itself
         moved_any = true;
       }
       if (!moved_any) break;
     }
+    if (!failed.empty())
+      refuse(failed.front(), walls_of(failed.front()),
+             "no position of its new radius touches them all (is it larger than its wall?)");
+  }
+
+  // The contacts a roller rolls on (it is their roller).
+  std::vector<const Contact*> walls_of(int f) const {
+    std::vector<const Contact*> walls;
+    for (int c : contacts_of[f])
+      if (contacts[c].roller == f) walls.push_back(&contacts[c]);
+    return walls;
   }
 
   // Ring by ring from the changed features, each feature whose contact broke takes the pose that
@@ -270,7 +286,9 @@ struct Propagator {
           left = solve_pose(p, out.surfaces, before, cs, FreeShape::Radius, length, s, motion);
         if (left > conflict) refuse(p, cs, "no pose of it touches them all");
         if (s.type != SurfaceType::Plane && !(rolling_radius(s) > 0.0)) refuse(p, cs, "its radius would vanish");
-        set(p, s, motion);
+        // The solve's pose may slide a cylinder along its axis or spin a round about it, which
+        // the contacts do not see: its vertices follow the motion that changes the surface only.
+        set(p, s, motion_between(before[p], s));
         queue.push_back(p);
       }
     }
