@@ -5,6 +5,7 @@
 #include "edit/move_vertices.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/boost/graph/Euler_operations.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <CGAL/Surface_mesh.h>
 
@@ -59,14 +60,74 @@ Eigen::Vector3d face_cross(const SurfaceMesh& sm, FaceIndex f) {
   return (b - a).cross(c - a);
 }
 
-// True when no triangle around `v` is degenerate or turned against its normal in `before`
-// (the triangles around v, in CGAL's order, with their cross products before the move).
-bool star_keeps_orientation(const SurfaceMesh& sm, const std::vector<std::pair<FaceIndex, Eigen::Vector3d>>& before) {
-  for (const auto& [f, was] : before) {
-    const Eigen::Vector3d now = face_cross(sm, f);
-    if (now.squaredNorm() == 0.0 || now.dot(was) <= 0.0) return false;
+// How squarely the triangle `f` faces its feature's surface: the cosine between its normal and the
+// surface's normal at its centre, times the feature's side (`sides`, facing_sides); 1 for a
+// triangle of no analytic feature.
+double facing(const SurfaceMesh& sm, const SurfaceMesh::Property_map<FaceIndex, int>& patch,
+              const std::vector<Surface>& surfaces, const std::vector<double>& sides, FaceIndex f) {
+  const int l = patch[f];
+  if (l < 0 || l >= static_cast<int>(surfaces.size()) || surfaces[l].type == SurfaceType::Freeform) return 1.0;
+  const auto h = sm.halfedge(f);
+  const Eigen::Vector3d a = vec(sm.point(sm.source(h))), b = vec(sm.point(sm.target(h))),
+                        c = vec(sm.point(sm.target(sm.next(h))));
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  const double length = n.norm();
+  return length > 0.0 ? sides[l] * n.dot(surface_normal(surfaces[l], (a + b + c) / 3.0)) / length : 0.0;
+}
+
+// What a relaxation move must keep of each triangle around the vertex: not degenerate, not turned
+// against its normal before, and facing its surface at least half as squarely as before. The last
+// catches a triangle laid flat across a border (its corners slid onto one border curve, at right
+// angles to its surface), which neither turns over nor degenerates; half leaves room for any
+// relocation along a surface, which tilts a triangle only as far as its chords sag.
+struct StarFace {
+  FaceIndex face;
+  Eigen::Vector3d cross;
+  double facing;
+};
+
+bool star_keeps_orientation(const SurfaceMesh& sm, const SurfaceMesh::Property_map<FaceIndex, int>& patch,
+                            const std::vector<Surface>& surfaces, const std::vector<double>& sides,
+                            const std::vector<StarFace>& before) {
+  for (const StarFace& was : before) {
+    const Eigen::Vector3d now = face_cross(sm, was.face);
+    if (now.squaredNorm() == 0.0 || now.dot(was.cross) <= 0.0) return false;
+    if (was.facing > 0.0 && facing(sm, patch, surfaces, sides, was.face) < 0.5 * was.facing) return false;
   }
   return true;
+}
+
+// Turns over, by an edge flip, the triangles of the features beside `faces` (the remeshed feature's)
+// that face against their surface: where a split of the border between them was projected onto
+// the border's curve, the neighbour's triangle across it may be left as an ear outside its own
+// face (three consecutive border vertices, over the hole's opening of a bored plate). An edge of
+// that triangle inside its feature is flipped when both triangles it makes then face their surface;
+// one whose flip would not is flipped back.
+void unfold_neighbours(SurfaceMesh& sm, const std::vector<FaceIndex>& faces, int feature,
+                       const SurfaceMesh::Property_map<SurfaceMesh::Edge_index, bool>& constrained_edge,
+                       const OntoFeatures& project, const std::vector<double>& sides) {
+  std::vector<FaceIndex> nearby;
+  for (FaceIndex f : faces)
+    for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm))
+      for (FaceIndex g : CGAL::faces_around_target(sm.halfedge(v), sm))
+        if (g != SurfaceMesh::null_face() && project.patch[g] != feature) nearby.push_back(g);
+  std::sort(nearby.begin(), nearby.end());
+  nearby.erase(std::unique(nearby.begin(), nearby.end()), nearby.end());
+  auto faces_out = [&](FaceIndex g) { return facing(sm, project.patch, *project.surfaces, sides, g) < 0.0; };
+  for (FaceIndex g : nearby) {
+    if (sm.is_removed(g) || !faces_out(g)) continue;
+    for (auto h : CGAL::halfedges_around_face(sm.halfedge(g), sm)) {
+      const auto o = sm.opposite(h);
+      if (constrained_edge[sm.edge(h)] || sm.is_border(h) || sm.is_border(o)) continue;
+      const VertexIndex a = sm.target(sm.next(h)), b = sm.target(sm.next(o));
+      if (a == b || sm.halfedge(a, b) != SurfaceMesh::null_halfedge()) continue;  // the new edge exists
+      CGAL::Euler::flip_edge(h, sm);
+      if (!faces_out(sm.face(h)) && !faces_out(sm.face(sm.opposite(h))) &&
+          face_cross(sm, sm.face(h)).squaredNorm() > 0.0 && face_cross(sm, sm.face(sm.opposite(h))).squaredNorm() > 0.0)
+        break;
+      CGAL::Euler::flip_edge(h, sm);  // back as it was
+    }
+  }
 }
 
 // Tangential relaxation of the vertices of `faces` (Botsch & Kobbelt 2004, section 4): an
@@ -84,7 +145,7 @@ bool star_keeps_orientation(const SurfaceMesh& sm, const std::vector<std::pair<F
 void relax_tangentially(SurfaceMesh& sm, const std::vector<FaceIndex>& faces,
                         const SurfaceMesh::Property_map<SurfaceMesh::Edge_index, bool>& constrained_edge,
                         const SurfaceMesh::Property_map<VertexIndex, bool>& fixed, const OntoFeatures& project,
-                        bool along_borders) {
+                        const std::vector<double>& sides, bool along_borders) {
   std::vector<VertexIndex> vertices;
   for (FaceIndex f : faces)
     for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) vertices.push_back(v);
@@ -114,11 +175,12 @@ void relax_tangentially(SurfaceMesh& sm, const std::vector<FaceIndex>& faces,
       if (lengths > 0.0 && a.dot(b) < -0.5 * lengths) moves.emplace_back(v, 0.5 * p + 0.25 * (border[0] + border[1]));
     }
   }
-  std::vector<std::pair<FaceIndex, Eigen::Vector3d>> before;
+  std::vector<StarFace> before;
   for (const auto& [v, target] : moves) {
     before.clear();
     for (FaceIndex f : CGAL::faces_around_target(sm.halfedge(v), sm))
-      if (f != SurfaceMesh::null_face()) before.emplace_back(f, face_cross(sm, f));
+      if (f != SurfaceMesh::null_face())
+        before.push_back({f, face_cross(sm, f), facing(sm, project.patch, *project.surfaces, sides, f)});
     const Point start = sm.point(v);
     const Eigen::Vector3d move = target - vec(start);
     bool moved = false;
@@ -126,7 +188,7 @@ void relax_tangentially(SurfaceMesh& sm, const std::vector<FaceIndex>& faces,
       const Eigen::Vector3d to = vec(start) + share * move;
       sm.point(v) = Point(to.x(), to.y(), to.z());
       sm.point(v) = project(v);
-      moved = star_keeps_orientation(sm, before);
+      moved = star_keeps_orientation(sm, project.patch, *project.surfaces, sides, before);
     }
     if (!moved) sm.point(v) = start;
   }
@@ -193,6 +255,7 @@ RemeshedLayer remesh_adaptive(const TriangleMesh& mesh, const std::vector<int>& 
   }
   const double length = bounding_box_diagonal(mesh);
   const OntoFeatures project{&sm, patch, &surfaces, &g1, length};
+  const std::vector<double> sides = facing_sides(mesh, labels, surfaces);
   for (size_t feature = 0; feature < target_edge_length.size(); ++feature) {
     if (!(target_edge_length[feature] > 0.0)) continue;
     std::vector<FaceIndex> faces;
@@ -217,7 +280,8 @@ RemeshedLayer remesh_adaptive(const TriangleMesh& mesh, const std::vector<int>& 
       faces.clear();
       for (FaceIndex f : sm.faces())
         if (patch[f] == static_cast<int>(feature)) faces.push_back(f);
-      relax_tangentially(sm, faces, constrained_edge, constrained_vertex, project, !keep_others);
+      unfold_neighbours(sm, faces, static_cast<int>(feature), constrained_edge, project, sides);
+      relax_tangentially(sm, faces, constrained_edge, constrained_vertex, project, sides, !keep_others);
     }
   }
   sm.collect_garbage();
