@@ -10,7 +10,7 @@ What is measured, each figure against the issue's target (the table says "no" wh
 
 1. Edits of generated parts (box, block with filleted top edges, plate with two holes, the bracket
    of tests/shapes.py, a boss on a plate with a fillet at its base, a block with chamfered top
-   edges), each meshed with shapes.quality_mesh(solid, 2.0) (FreeCAD's Mefisto, vertices on the
+   edges, a box with every edge rounded: fillets meeting in corner balls), each meshed with shapes.quality_mesh(solid, 2.0) (FreeCAD's Mefisto, vertices on the
    faces) and idealized. The top plane is pushed and pulled by +5, -5 and +half the part's height;
    hole radius and position, fillet radius, boss radius and the boss's fillet tube are changed.
    Per edit:
@@ -151,6 +151,14 @@ def boss(h=10.0, bh=15.0, r=8.0, f=3.0):
     return solid.makeFillet(f, base)
 
 
+def rounded(h=30.0, r=5.0):
+    """60 x 40 x h with every edge rounded (r): twelve fillets meeting in eight corner balls, the
+    commonest machined shape (thesis Fig 6.9)."""
+    _, Part = cad()
+    block = Part.makeBox(60, 40, h)
+    return block.makeFillet(r, block.Edges)
+
+
 def chamfered(h=20.0, c=3.0):
     """60 x 40 x h, its four top edges chamfered (c x c): 10 planes."""
     _, Part = cad()
@@ -184,6 +192,9 @@ PARTS: Dict[str, Dict] = {
                      ("base fillet r 3→4", "minor", ("torus", 3.0), 4.0, {"f": 4.0})]),
     "chamfered": dict(build=chamfered, params={}, description="block 60x40x20, top edges chamfered 3",
                       edits=push_pulls(20.0)),
+    "rounded": dict(build=rounded, params={}, description="box 60x40x30, every edge rounded r 5 (corner balls)",
+                    edits=push_pulls(30.0) + [("fillets r 5→4", "radius", ("cylinder", 5.0), 4.0, {"r": 4.0}),
+                                              ("fillets r 5→6", "radius", ("cylinder", 5.0), 6.0, {"r": 6.0})]),
 }
 
 # Section 2: 20 edits each, returning the part to its start. Steps: (operation, target, argument,
@@ -367,17 +378,29 @@ def solid_summary(layer) -> Dict:
             "problems": [str(p) for p in solid.problems]}
 
 
-def make_layer(solid):
+# Section 1 edits each part on three meshes: FreeCAD's Mefisto mesher (isotropic, vertices on the
+# faces), FreeCAD's own tessellation as Part's shape.tessellate(0.05) gives it (what a CAD system's STL
+# export looks like: long thin triangles), and MeshPart's deflection mesh (its Standard mesher, as
+# the segmentation benchmark's cad variant: linear deflection 0.1 % of the diagonal, 0.35 rad).
+MESH_KINDS = ("isotropic", "tessellate", "deflection")
+
+
+def make_layer(solid, kind="isotropic"):
     import idealize
     import shapes
-    V, F = shapes.quality_mesh(solid, MESH_LENGTH)
+    if kind == "isotropic":
+        V, F = shapes.quality_mesh(solid, MESH_LENGTH)
+    elif kind == "tessellate":
+        V, F, _ = shapes.tessellate_with_faces(solid, 0.05)
+    else:
+        V, F, _ = shapes.cad_export(solid, 1e-3 * solid.BoundBox.DiagonalLength, 0.35)
     return idealize.idealize(idealize.Mesh(V, F))
 
 
 # ----------------------------------------------------------------------------------------------
 # Section 1
 
-def run_part(name: str) -> Dict:
+def run_part(name: str, kind: str = "isotropic") -> Dict:
     spec = PARTS[name]
     build = spec["build"]
     start = time.perf_counter()
@@ -385,9 +408,9 @@ def run_part(name: str) -> Dict:
     if name == "bracket":  # the parametric copy is tests/shapes.py's part
         import shapes
         assert abs(original.Volume - shapes.bracket_solid().Volume) < 1e-9 * original.Volume
-    layer = make_layer(original)
+    layer = make_layer(original, kind)
     before = solid_summary(layer)
-    out = {"part": name, "description": spec["description"], "triangles": int(len(layer.mesh.faces)),
+    out = {"part": part_label(name, kind), "mesh": kind, "description": spec["description"], "triangles": int(len(layer.mesh.faces)),
            "features": len(layer.features), "cad_faces": len(original.Faces), "cad_volume": float(original.Volume),
            "before": before, "before_deviation": layer.deviation["max"] / diagonal(layer),
            "before_tangent_deg": tangent_angles(layer)["max_deg"], "edits": []}
@@ -603,8 +626,20 @@ def guarded(function: Callable, name: str) -> Dict:
                 "pass": {"run": False}}
 
 
-def run_part_task(name: str) -> Dict:
-    return guarded(run_part, name)
+def part_kind(part: Dict) -> str:
+    """The mesh kind of a section 1 result (a failed part's from its row name)."""
+    if "mesh" in part:
+        return part["mesh"]
+    return next((k for k in MESH_KINDS if part["part"].endswith("(%s)" % k)), "isotropic")
+
+
+def part_label(name: str, kind: str) -> str:
+    """A part's row name: the isotropic mesh's as before, the others with their mesh kind."""
+    return name if kind == "isotropic" else "%s (%s)" % (name, kind)
+
+
+def run_part_task(task) -> Dict:
+    return guarded(lambda _: run_part(*task), part_label(*task))
 
 
 def run_sequence_task(name: str) -> Dict:
@@ -658,6 +693,13 @@ def markdown(results: Dict) -> str:
                 row["faces_before"], row["solid"]["faces"], row["exact_faces"],
                 yes(ok["solid"]) + ("" if not row["solid"]["problems"] else " " + "; ".join(row["solid"]["problems"])[:80]),
                 yes(ok["mesh"]), mesh["boundary_edges"], mesh["nonmanifold_edges"], mesh["self_intersecting_pairs"]))
+    per_kind = []
+    for kind in MESH_KINDS:
+        rows = [row for part in results["parts"] if part_kind(part) == kind for row in part.get("edits", [{}])]
+        if rows:
+            per_kind.append("%s %d of %d" % (kind, sum(bool(r.get("pass")) and all(r["pass"].values()) for r in rows),
+                                             len(rows)))
+    lines += ["", "Edits that meet every check, per mesh: " + "; ".join(per_kind) + "."]
     skipped = ["%s %s: %s" % (part["part"], row["edit"], row["remeshing_problem"]) for part in results["parts"]
                for row in part.get("edits", []) if row.get("remeshing_problem")]
     if skipped:
@@ -738,6 +780,7 @@ def main(argv=None) -> int:
     from run_segmentation import machine_info
     start = time.perf_counter()
     parts = QUICK_PARTS if args.quick else tuple(PARTS)
+    kinds = ("isotropic",) if args.quick else MESH_KINDS
     sequences = QUICK_SEQUENCES if args.quick else tuple(SEQUENCES)
     results: Dict = {"date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
                      "command": "/usr/bin/python3 bench/run_edit.py" + "".join(" " + a for a in (argv if argv is not None else sys.argv[1:])),
@@ -749,7 +792,7 @@ def main(argv=None) -> int:
         structure_mesh = None if args.quick else pool.submit(structure_edits.speed_mesh)
         structure_futures = [pool.submit(run_structure_task, name) for name in structure_edits.TASKS]
         sequence_futures = [pool.submit(run_sequence_task, name) for name in sequences]
-        part_futures = [pool.submit(run_part_task, name)
+        part_futures = [pool.submit(run_part_task, (name, kind)) for kind in kinds
                         for name in sorted(parts, key=lambda n: -len(PARTS[n]["edits"]))]
         results["sequences"] = []
         for future in sequence_futures:
@@ -760,7 +803,7 @@ def main(argv=None) -> int:
             row = future.result()
             done[row["part"]] = row
             log("  part %-10s done (%.0f s)" % (row["part"], row.get("seconds", 0)))
-        results["parts"] = [done[name] for name in parts]
+        results["parts"] = [done[part_label(name, kind)] for kind in kinds for name in parts]
         results["structure"] = [future.result() for future in structure_futures]
         log("  structure-altering edits done")
         meshes = [future.result() for future in mesh_futures]
