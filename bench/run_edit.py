@@ -59,10 +59,11 @@ import datetime
 import json
 import multiprocessing
 import statistics
+import subprocess
 import sys
 import time
 import traceback
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Tuple
 
@@ -638,8 +639,17 @@ def part_label(name: str, kind: str) -> str:
     return name if kind == "isotropic" else "%s (%s)" % (name, kind)
 
 
-def run_part_task(task) -> Dict:
-    return guarded(lambda _: run_part(*task), part_label(*task))
+def run_part_isolated(task) -> Dict:
+    """run_part(name, kind) in a child process; a child that dies (a crash) gives a row saying so."""
+    label = part_label(*task)
+    done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--one-part", *task], capture_output=True,
+                          text=True, timeout=3600)
+    rows = [line[len("ROW "):] for line in done.stdout.splitlines() if line.startswith("ROW ")]
+    if done.returncode != 0 or not rows:  # every edit of the part counts as failed
+        why = "the process crashed (exit status %d)" % done.returncode
+        return {"part": label, "mesh": task[1], "triangles": 0, "error": why,
+                "edits": [{"edit": edit[0], "error": why, "pass": {"edit": False}} for edit in PARTS[task[0]]["edits"]]}
+    return json.loads(rows[-1])
 
 
 def run_sequence_task(name: str) -> Dict:
@@ -775,7 +785,12 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default=None, metavar="NAME",
                         help="results/NAME.json and .md (default edit, or edit-quick with --quick)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (the machine's two cores)")
+    parser.add_argument("--one-part", nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.one_part:  # a child of run_part_isolated: one part on one mesh, its row on standard output
+        row = guarded(lambda _: run_part(*args.one_part), part_label(*args.one_part))
+        print("ROW " + json.dumps(row, default=float), flush=True)
+        return 0
     cad()  # fail early without FreeCAD
     from run_segmentation import machine_info
     start = time.perf_counter()
@@ -792,22 +807,22 @@ def main(argv=None) -> int:
         structure_mesh = None if args.quick else pool.submit(structure_edits.speed_mesh)
         structure_futures = [pool.submit(run_structure_task, name) for name in structure_edits.TASKS]
         sequence_futures = [pool.submit(run_sequence_task, name) for name in sequences]
-        part_futures = [pool.submit(run_part_task, (name, kind)) for kind in kinds
-                        for name in sorted(parts, key=lambda n: -len(PARTS[n]["edits"]))]
         results["sequences"] = []
         for future in sequence_futures:
             results["sequences"].append(future.result())
             log("  sequence %-10s done (%.0f s)" % (results["sequences"][-1]["part"], results["sequences"][-1].get("seconds", 0)))
-        done = {}
-        for future in part_futures:
-            row = future.result()
-            done[row["part"]] = row
-            log("  part %-10s done (%.0f s)" % (row["part"], row.get("seconds", 0)))
-        results["parts"] = [done[part_label(name, kind)] for kind in kinds for name in parts]
         results["structure"] = [future.result() for future in structure_futures]
         log("  structure-altering edits done")
         meshes = [future.result() for future in mesh_futures]
         structure_mesh = structure_mesh.result() if structure_mesh is not None else None
+    # The parts, each in a process of its own: an edit that crashes the process is a row that says so.
+    with ThreadPoolExecutor(args.workers) as threads:
+        tasks = [(name, kind) for kind in kinds for name in sorted(parts, key=lambda n: -len(PARTS[n]["edits"]))]
+        done = {}
+        for row in threads.map(run_part_isolated, tasks):
+            done[row["part"]] = row
+            log("  part %-22s done (%.0f s)" % (row["part"], row.get("seconds", 0)))
+        results["parts"] = [done[part_label(name, kind)] for kind in kinds for name in parts]
     if not args.quick:  # alone, after the pool: timings on an idle machine (as idle as it gets)
         results["speed"] = guarded(lambda _: run_speed(meshes), "speed")
         results["structure_speed"] = guarded(lambda _: structure_edits.run_speed(*structure_mesh), "structure speed")
