@@ -129,6 +129,16 @@ def shoot(key):
     view.saveImage(CONFIG[key], 800, 600, "White")
 
 
+def isometric_view():
+    """The active 3D view turned isometric and fitted, with nothing selected: where tests click."""
+    Gui.Selection.clearSelection()
+    view = Gui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    view.fitAll()
+    wait(0.3)
+    return view
+
+
 def show_only(obj):
     """Show `obj` alone in the view, as a user does (Space on the tree's items) to click on it."""
     for other in obj.Document.Objects:
@@ -290,10 +300,7 @@ def run():
         result["highlight"] = {"cylinder_facets": labels.count(cylinder), "bright": base}
         panel.form.grab().save(CONFIG["screenshot_panel"])
         # A click on a plane in the view selects that plane's row.
-        view = Gui.ActiveDocument.ActiveView
-        view.viewIsometric()
-        view.fitAll()
-        wait(0.3)
+        view = isometric_view()
         planes = [int(table.item(r, 0).text()) for r in range(table.rowCount()) if table.item(r, 1).text() == "plane"]
         clicked = next((p for p in planes if click_feature(view, layer, p) is not None), None)
         Gui.updateGui()

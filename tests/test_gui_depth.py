@@ -31,11 +31,7 @@ def run():
     wall = [f["id"] for f in table["features"] if f["type"] == "cylinder"][0]
     result["wall"] = wall
     # A click on the hole's wall in the solid Make B-rep solid shows: the command edits its feature.
-    Gui.Selection.clearSelection()
-    view = Gui.ActiveDocument.ActiveView
-    view.viewIsometric()
-    view.fitAll()
-    wait(0.3)
+    view = isometric_view()
     result["solid_visible"] = solid.ViewObject.Visibility and not layer.ViewObject.Visibility
     result["clicked"] = click_face(view, solid, list(solid.IdealizeFaceFeatures).index(wall)) is not None
     result["push_pull_active"] = Gui.Command.get("Idealize_PushPull").isActive()

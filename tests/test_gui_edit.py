@@ -45,15 +45,20 @@ def run():
     result["before"] = layer_state(doc, layer, solid)
 
     # A click on the top face in the view selects it; the command works on its feature.
-    Gui.Selection.clearSelection()
     show_only(layer)  # Make B-rep solid showed the solid in its place
-    view = Gui.ActiveDocument.ActiveView
-    view.viewIsometric()
-    view.fitAll()
-    wait(0.3)
+    view = isometric_view()
     result["push_pull_active_before_click"] = Gui.Command.get("Idealize_PushPull").isActive()
+    shots = [os.path.join(os.path.dirname(CONFIG["result"]), name) for name in ("unselected.png", "selected.png")]
+    view.saveImage(shots[0], 400, 300, "Current")
     result["clicked"] = click_feature(view, layer, top) is not None
     result["selected_feature"] = selected_features(layer)
+    view.saveImage(shots[1], 400, 300, "Current")
+    # The selection shows on the clicked feature's faces, not on the whole layer.
+    import numpy as np
+    (before, coloured), (after, _) = screenshot_pixels(shots[0]), screenshot_pixels(shots[1])
+    part = (before.max(axis=1) - before.min(axis=1)) > 40
+    result["highlighted_share"] = float((np.abs(after - before).sum(axis=1) > 30)[part].mean())
+    result["highlight_shown"] = list(layer.ViewObject.Proxy.highlight.shown["sel"])
     result["layer_visible_before"] = layer.ViewObject.Visibility
     graph = Gui.ActiveDocument.ActiveView.getSceneGraph()
     children = graph.getNumChildren()
@@ -140,6 +145,10 @@ def test_a_click_on_the_face_selects_its_feature_and_enables_the_command(push_pu
     assert not push_pull_run["push_pull_active_before_click"]
     assert push_pull_run["clicked"]
     assert push_pull_run["selected_feature"] == push_pull_run["top"]
+    # The top face's share of the part's pixels in an isometric view, not all of them (FreeCAD's
+    # mesh view highlights the whole object) and not none.
+    assert push_pull_run["highlight_shown"] == push_pull_run["top"]
+    assert 0.1 < push_pull_run["highlighted_share"] < 0.8
 
 
 def test_the_command_opens_the_panel_on_the_selected_face(push_pull_run):

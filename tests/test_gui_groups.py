@@ -31,13 +31,8 @@ def select_boss_wall(doc, layer):
 
 def click_wall(layer, wall):
     """Select `wall` by a click where it shows in an isometric view; records what was selected."""
-    Gui.Selection.clearSelection()
     show_only(layer)  # Make B-rep solid showed the solid in its place
-    view = Gui.ActiveDocument.ActiveView
-    view.viewIsometric()
-    view.fitAll()
-    wait(0.3)
-    click_feature(view, layer, wall)
+    click_feature(isometric_view(), layer, wall)
     result.setdefault("clicked", []).append([wall, selected_features(layer)])
 
 

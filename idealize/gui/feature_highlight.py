@@ -5,8 +5,8 @@ view_layer.ViewProviderFeatureLayer.getElementPicked): its feature is what the e
 work on. FreeCAD's mesh view highlights the whole object when any part of it is pre-selected or
 selected, which would say nothing about which feature a click takes. Here the mesh's own highlight
 is turned off, and the faces of the feature under the pointer (pre-selection colour) and of the
-selected features (selection colour) are drawn over the layer instead, from the user's colour
-preferences.
+selected features (selection colour; every feature when the whole object is selected, as from the
+tree) are drawn over the layer instead, from the user's colour preferences.
 
 The overlay shares the layer's own coordinate node (no copy of the mesh; it follows the mesh when it
 changes) and draws the features' triangles with a polygon offset towards the viewer. It is never
@@ -125,6 +125,15 @@ class FeatureHighlight:
             return None
         return int(labels[facet])
 
+    def features_of(self, elements):
+        """The features that the selection's sub-elements of the layer name: those of its facets, or
+        every feature for the whole object (no sub-element, as the tree selects it)."""
+        _, labels = self._layer_arrays()
+        if not elements or any(not element for element in elements):
+            return [int(f) for f in np.unique(labels) if f >= 0]
+        features = (self.feature_of(facet) for facet in map(_facet, elements) if facet is not None)
+        return [f for f in features if f is not None]
+
     def show(self, kind, features):
         features = tuple(sorted(set(features)))
         if features == self.shown[kind]:
@@ -174,11 +183,9 @@ class _Observer:
     def setPreselection(self, document, name, element):
         self.removePreselection("", "", "")
         highlight = _highlight(document, name)
-        facet = _facet(element)
-        if highlight is None or facet is None:
+        if highlight is None:
             return
-        feature = highlight.feature_of(facet)
-        highlight.show("pre", () if feature is None else (feature,))
+        highlight.show("pre", highlight.features_of([element]))
         self.pre = (document, name)
 
     def removePreselection(self, document, name, element):
@@ -190,9 +197,9 @@ class _Observer:
 
     def _refresh(self, document):
         """Show the selected features of every layer of `document` (all documents when empty)."""
-        chosen = {}
+        chosen = {}  # (document, object) -> its selected sub-elements ("" for the whole object)
         for entry in FreeCADGui.Selection.getSelectionEx(document or "*"):
-            chosen.setdefault((entry.DocumentName, entry.ObjectName), []).extend(entry.SubElementNames)
+            chosen.setdefault((entry.DocumentName, entry.ObjectName), []).extend(entry.SubElementNames or [""])
         for doc in FreeCAD.listDocuments().values():
             if document and doc.Name != document:
                 continue
@@ -200,9 +207,8 @@ class _Observer:
                 highlight = _highlight(doc.Name, obj.Name)
                 if highlight is None:
                     continue
-                features = [highlight.feature_of(f) for f in map(_facet, chosen.get((doc.Name, obj.Name), ()))
-                            if f is not None]
-                highlight.show("sel", [f for f in features if f is not None])
+                elements = chosen.get((doc.Name, obj.Name))
+                highlight.show("sel", highlight.features_of(elements) if elements else ())
 
     def addSelection(self, document, name, element, point):
         self._refresh(document)
