@@ -12,13 +12,12 @@ The overlay shares the layer's own coordinate node (no copy of the mesh; it foll
 changes) and draws the features' triangles with a polygon offset towards the viewer. It is never
 picked, so picks still reach the layer. One Selection observer serves every layer.
 """
-import itertools
-
 import FreeCAD
 import FreeCADGui
 import numpy as np
 
 from ..freecad import layer_object
+from ..freecad.mesh import mesh_from_freecad
 
 # FreeCAD's defaults for the pre-selection and selection colours (Preferences → Display → Colors),
 # used when the user has not set them: the packed RGBA of its View parameters.
@@ -55,7 +54,6 @@ class FeatureHighlight:
         self.faces = {}        # "pre" / "sel" -> their SoIndexedFaceSet
         self.shown = {"pre": (), "sel": ()}
         self._triangles = None  # the layer's triangles and labels, until the layer changes
-
         self._labels = None
 
     def _build(self):
@@ -104,9 +102,7 @@ class FeatureHighlight:
         """(triangles #F x 3, labels #F) of the layer's mesh, cached until the mesh changes."""
         if self._triangles is None:
             obj = self.vobj.Object
-            facets = obj.Mesh.Topology[1]
-            self._triangles = np.fromiter(itertools.chain.from_iterable(facets), dtype=np.int32,
-                                          count=3 * len(facets)).reshape(-1, 3)
+            self._triangles = mesh_from_freecad(obj.Mesh).faces
             self._labels = np.asarray(obj.Labels, dtype=np.int32)
         return self._triangles, self._labels
 
@@ -148,10 +144,6 @@ class FeatureHighlight:
         faces.coordIndex.setNum(len(index))
         if len(index):
             faces.coordIndex.setValues(0, len(index), index)
-
-    def clear(self):
-        for kind in self.shown:
-            self.show(kind, ())
 
     def set_visible(self, visible):
         if self.node is not None:

@@ -276,6 +276,13 @@ std::vector<double> facing_sides(const TriangleMesh& mesh, const std::vector<int
   return facing;
 }
 
+double facing_cosine(const Surface& surface, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                     const Eigen::Vector3d& c) {
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  const double length = n.norm();
+  return length > 0.0 ? n.dot(surface_normal(surface, (a + b + c) / 3.0)) / length : 0.0;
+}
+
 std::string inverted_triangles(const TriangleMesh& mesh, const std::vector<int>& labels,
                                const std::vector<Surface>& surfaces, const std::vector<double>& sides,
                                const std::vector<char>& edited) {
@@ -288,8 +295,7 @@ std::string inverted_triangles(const TriangleMesh& mesh, const std::vector<int>&
     // curve of a round surface (CAD meshers put such triangles at fillets' ends) stands at right
     // angles to it: its facing is zero up to rounding, and its sign means nothing. A cosine below
     // -1e-6 (0.00006 degrees past the right angle, a thousand times the rounding's 1e-9) is a turn.
-    const Eigen::Vector3d area = (b - a).cross(c - a);
-    if (sides[l] * area.dot(surface_normal(surfaces[l], (a + b + c) / 3.0)) < -1e-6 * area.norm()) ++inverted[l];
+    if (sides[l] * facing_cosine(surfaces[l], a, b, c) < -1e-6) ++inverted[l];
   }
   if (inverted.empty()) return "";
   const auto worst = std::max_element(inverted.begin(), inverted.end(),

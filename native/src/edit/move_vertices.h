@@ -39,6 +39,11 @@ Eigen::Vector3d onto_features(const std::vector<int>& features, const std::vecto
 std::vector<double> facing_sides(const TriangleMesh& mesh, const std::vector<int>& labels,
                                  const std::vector<Surface>& surfaces);
 
+// How squarely the triangle (a, b, c) faces `surface`'s positive side: the cosine between its
+// normal and the surface's normal at its centre; 0 for a degenerate triangle.
+double facing_cosine(const Surface& surface, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                     const Eigen::Vector3d& c);
+
 // An edit that turns triangles over: the change is too large for the mesh as it is (a border moved
 // across more triangles than the remeshing can relocate), or impossible (a face pushed past the one
 // behind it). Edits in smaller steps tell the two apart.

@@ -52,27 +52,26 @@ struct OntoFeatures {
 
 Eigen::Vector3d vec(const Point& p) { return Eigen::Vector3d(p.x(), p.y(), p.z()); }
 
+// The corners of face `f`, in its order.
+std::array<Eigen::Vector3d, 3> corners(const SurfaceMesh& sm, FaceIndex f) {
+  const auto h = sm.halfedge(f);
+  return {vec(sm.point(sm.source(h))), vec(sm.point(sm.target(h))), vec(sm.point(sm.target(sm.next(h))))};
+}
+
 // The cross product of the edges of face `f` (twice its area along its normal).
 Eigen::Vector3d face_cross(const SurfaceMesh& sm, FaceIndex f) {
-  const auto h = sm.halfedge(f);
-  const Eigen::Vector3d a = vec(sm.point(sm.source(h))), b = vec(sm.point(sm.target(h))),
-                        c = vec(sm.point(sm.target(sm.next(h))));
+  const auto [a, b, c] = corners(sm, f);
   return (b - a).cross(c - a);
 }
 
-// How squarely the triangle `f` faces its feature's surface: the cosine between its normal and the
-// surface's normal at its centre, times the feature's side (`sides`, facing_sides); 1 for a
-// triangle of no analytic feature.
+// How squarely the triangle `f` faces its feature's surface (facing_cosine) times the feature's side
+// (`sides`, facing_sides); 1 for a triangle of no analytic feature.
 double facing(const SurfaceMesh& sm, const SurfaceMesh::Property_map<FaceIndex, int>& patch,
               const std::vector<Surface>& surfaces, const std::vector<double>& sides, FaceIndex f) {
   const int l = patch[f];
   if (l < 0 || l >= static_cast<int>(surfaces.size()) || surfaces[l].type == SurfaceType::Freeform) return 1.0;
-  const auto h = sm.halfedge(f);
-  const Eigen::Vector3d a = vec(sm.point(sm.source(h))), b = vec(sm.point(sm.target(h))),
-                        c = vec(sm.point(sm.target(sm.next(h))));
-  const Eigen::Vector3d n = (b - a).cross(c - a);
-  const double length = n.norm();
-  return length > 0.0 ? sides[l] * n.dot(surface_normal(surfaces[l], (a + b + c) / 3.0)) / length : 0.0;
+  const auto [a, b, c] = corners(sm, f);
+  return sides[l] * facing_cosine(surfaces[l], a, b, c);
 }
 
 // What a relaxation move must keep of each triangle around the vertex: not degenerate, not turned
@@ -256,11 +255,15 @@ RemeshedLayer remesh_adaptive(const TriangleMesh& mesh, const std::vector<int>& 
   const double length = bounding_box_diagonal(mesh);
   const OntoFeatures project{&sm, patch, &surfaces, &g1, length};
   const std::vector<double> sides = facing_sides(mesh, labels, surfaces);
-  for (size_t feature = 0; feature < target_edge_length.size(); ++feature) {
-    if (!(target_edge_length[feature] > 0.0)) continue;
+  auto faces_of = [&](int feature) {
     std::vector<FaceIndex> faces;
     for (FaceIndex f : sm.faces())
-      if (patch[f] == static_cast<int>(feature)) faces.push_back(f);
+      if (patch[f] == feature) faces.push_back(f);
+    return faces;
+  };
+  for (size_t feature = 0; feature < target_edge_length.size(); ++feature) {
+    if (!(target_edge_length[feature] > 0.0)) continue;
+    std::vector<FaceIndex> faces = faces_of(static_cast<int>(feature));
     if (faces.empty()) continue;
     // A round: CGAL splits, collapses and flips, and projects onto the features; then the
     // relaxation here (CGAL's is off, see relax_tangentially).
@@ -277,9 +280,7 @@ RemeshedLayer remesh_adaptive(const TriangleMesh& mesh, const std::vector<int>& 
       } catch (const std::exception& e) {
         throw MeshError(std::string("the adaptive remeshing failed: ") + e.what());
       }
-      faces.clear();
-      for (FaceIndex f : sm.faces())
-        if (patch[f] == static_cast<int>(feature)) faces.push_back(f);
+      faces = faces_of(static_cast<int>(feature));
       unfold_neighbours(sm, faces, static_cast<int>(feature), constrained_edge, project, sides);
       relax_tangentially(sm, faces, constrained_edge, constrained_vertex, project, sides, !keep_others);
     }
