@@ -282,3 +282,20 @@ def test_one_fillet_alone_cannot_keep_its_corner_balls(corner_balls):
     fillet = cylinders(layer, 5.0)[0]
     with pytest.raises(edit.EditConflict, match="sphere"):
         edit.set_parameter(layer, fillet, "radius", 6.0, keep={"equal_radius": False})
+
+
+@needs_freecad
+def test_pushing_a_hole_shut_is_a_conflict_not_a_bad_argument(plate):
+    """A push/pull that would shrink a radius past nothing is an edit no shape satisfies."""
+    layer, _ = plate
+    hole = cylinders(layer, 4.0)[0]
+    outcomes = []
+    for distance in (5.0, -5.0):  # one of them shrinks the hole past its radius of 4
+        try:
+            edit.push_pull(layer, hole, distance)
+            outcomes.append("done")
+        except edit.EditConflict as conflict:
+            outcomes.append("radius" if "radius would be" in str(conflict) else "conflict")
+    assert "radius" in outcomes
+    with pytest.raises(ValueError):
+        edit.set_parameter(layer, hole, "radius", -1.0)

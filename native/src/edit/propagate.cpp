@@ -65,10 +65,17 @@ Surface with_parameter(const Surface& s, EditParameter parameter, double value, 
       out.half_angle = value;
       break;
   }
+  // A push/pull that shrinks a round past nothing asks for a shape that cannot be: a conflict, as
+  // any edit no configuration satisfies. A value given outright is an argument that does not apply.
+  auto impossible = [&](const std::string& why) {
+    if (parameter != EditParameter::Offset) refuse(why);
+    throw EditConflict("pushing feature " + std::to_string(feature) + " (" + surface_type_name(s.type) + ") by " +
+                       std::to_string(value) + ": " + why + "; the layer is unchanged");
+  };
   if (s.type != SurfaceType::Plane && s.type != SurfaceType::Cone && !(out.radius > 0.0))
-    refuse("its radius would be " + std::to_string(out.radius) + ", not positive");
+    impossible("its radius would be " + std::to_string(out.radius) + ", not positive");
   if (s.type == SurfaceType::Torus && !(out.minor > 0.0 && out.minor < out.radius))
-    refuse("its tube radius must stay between 0 and its major radius");
+    impossible("its tube radius must stay between 0 and its major radius");
   return out;
 }
 
