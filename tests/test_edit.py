@@ -236,6 +236,54 @@ def test_editing_a_box_with_corner_balls_never_crashes(tmp_path):
     assert run.stdout.startswith("20 edits:")
 
 
+REAL_MESH_PUSHES = r'''
+import resource, sys
+sys.path[:0] = [REPO, REPO + "/tests"]
+# A runaway remeshing grew past 20 GB here; 3 GB is many times what this 13k-triangle mesh needs.
+resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+import numpy as np
+import idealize
+from idealize import edit
+layer = idealize.idealize(idealize.load_mesh(MESH))
+V0 = np.asarray(layer.mesh.vertices)
+outcomes = []
+for f in layer.features:
+    if f["type"] not in ("plane", "cylinder"):
+        continue
+    for distance in (1.0, -1.0):
+        try:
+            V = np.asarray(edit.push_pull(layer, f["id"], distance).mesh.vertices)
+        except edit.EditConflict:
+            outcomes.append("refused")
+            continue
+        # Nothing of the part moves further out than the push (and the mesh's distance from its
+        # surfaces, which the vertices put onto them lose).
+        grown = max((V0.min(0) - V.min(0)).max(), (V.max(0) - V0.max(0)).max())
+        assert grown <= abs(distance) + layer.distance_tolerance, (f["id"], distance, grown)
+        outcomes.append("done")
+print(len(outcomes), "edits:", sorted(set(outcomes)))
+'''
+
+
+@needs_freecad
+@shapes.needs_shared_data
+def test_pushing_a_real_mesh_never_runs_away(tmp_path):
+    """Regression: on a real mesh, pushing a cylinder sent the border of two nearly tangent
+    surfaces (a plane and a cylinder that were not a tangent pair) to where they cross, thousands of
+    units away; remeshing that took all memory. Every push of a plane or cylinder by +-1 must end in a
+    result no larger than the push allows, or an EditConflict, within a bounded memory."""
+    import os
+    import subprocess
+    import sys
+    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    mesh = shapes.SHARED_STEP.parent / "mesh" / "fandisk.obj"
+    script = tmp_path / "real_pushes.py"
+    script.write_text("REPO = %r\nMESH = %r\n" % (repo, str(mesh)) + REAL_MESH_PUSHES)
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, "the edits failed (exit %d): %s" % (run.returncode, run.stderr[-2000:])
+    assert " edits:" in run.stdout
+
+
 @pytest.fixture(scope="module")
 def corner_balls():
     """60 x 40 x 30 with every edge rounded (r 5): twelve fillets meeting in eight corner balls."""

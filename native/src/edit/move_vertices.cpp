@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <string>
@@ -149,6 +150,44 @@ Eigen::MatrixXd harmonic_correction(const TriangleMesh& mesh, const std::vector<
   return correction;
 }
 
+// Throws EditConflict when a vertex would leave the part: moved further than the edit moves any
+// point of its changed features plus the part's bounding-box diagonal `length`. Harmonic
+// interpolation moves no vertex further than its borders, and a border vertex follows its
+// surfaces' intersection; such a vertex went to where two nearly tangent surfaces (no tangent pair
+// of the layer) cross far from the mesh's border between them. Remeshing it would build a
+// surface the size of that distance at the feature's edge length (billions of triangles).
+void refuse_runaway(const TriangleMesh& mesh, const MatrixX3d& V, const std::vector<std::vector<int>>& around,
+                    const std::vector<Surface>& before, const std::vector<Surface>& after,
+                    const std::vector<char>& changed, const std::vector<Eigen::Isometry3d>& motions,
+                    double length) {
+  double reach = 0.0;  // the farthest the edit itself carries a point of a changed feature
+  for (int v = 0; v < mesh.num_vertices(); ++v)
+    for (int f : around[v])
+      if (changed[f]) {
+        const Eigen::Vector3d x = mesh.V.row(v).transpose();
+        reach = std::max(reach, (closest_point(after[f], motions[f] * x) - x).norm());
+      }
+  // The one to name: on the most features (the interior ones follow their borders), then the
+  // farthest; a vertex sent to infinity counts as farthest.
+  int worst = -1;
+  auto distance = [&](int v) {
+    const double moved = (V.row(v) - mesh.V.row(v)).norm();
+    return std::isfinite(moved) ? moved : std::numeric_limits<double>::infinity();
+  };
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (distance(v) <= reach + length) continue;
+    if (worst < 0 || std::make_pair(around[v].size(), distance(v)) > std::make_pair(around[worst].size(), distance(worst)))
+      worst = v;
+  }
+  if (worst < 0) return;
+  std::string names;
+  for (int f : around[worst])
+    names += std::string(names.empty() ? "" : " and ") + std::to_string(f) + " (" + surface_type_name(before[f].type) + ")";
+  throw EditConflict("the edit would carry the border of features " + names +
+                     " far outside the part: their surfaces no longer cross near that border (nearly "
+                     "tangent); the layer is unchanged");
+}
+
 }  // namespace
 
 Eigen::Vector3d onto_features(const std::vector<int>& features, const std::vector<Surface>& surfaces,
@@ -253,6 +292,7 @@ MovedVertices move_vertices(const TriangleMesh& mesh, const std::vector<int>& la
         out.V.row(v) = onto_features(around[v], after, g1, x, length).transpose();
       }
   }
+  refuse_runaway(mesh, out.V, around, before, after, changed, propagation.motions, length);
   // The region remeshing redoes.
   out.region.assign(mesh.num_faces(), 0);
   for (int f = 0; f < mesh.num_faces(); ++f) {
