@@ -326,7 +326,7 @@ std::vector<int> BrepBuilder::face_features(const MeshTopology& topology, const 
   const std::vector<int> merged = dissolve_sampling_blends(clean, topology, merge_same_surfaces(clean_labels));
   progress_.step(0.25);
   const int unexplained = static_cast<int>(surfaces_.size());
-  const std::vector<int> face_feature = complete_face_features(clean, topology, merged, surfaces_, 0.1, unexplained);
+  const std::vector<int> face_feature = complete_face_features(clean, topology, merged, surfaces_, tol_, 0.1, unexplained);
   if (std::count(face_feature.begin(), face_feature.end(), unexplained)) {
     Surface freeform;
     freeform.type = SurfaceType::Freeform;

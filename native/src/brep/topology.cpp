@@ -45,8 +45,8 @@ double surface_gap(const Surface& surface, const Eigen::Vector3d& p) {
 
 std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopology& topology,
                                         const std::vector<int>& labels,
-                                        const std::vector<Surface>& surfaces, double island_fraction,
-                                        int unexplained) {
+                                        const std::vector<Surface>& surfaces, double tolerance,
+                                        double island_fraction, int unexplained) {
   const int nf = mesh.num_faces();
   std::vector<int> feature(labels);
   // Grow the labelled faces into the unlabelled ones, one ring per round.
@@ -108,6 +108,19 @@ std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopo
         else ++it->second;
       }
     }
+    // Only a neighbour whose surface explains the piece takes it: its vertices lie on that surface
+    // within the tolerance, or as close as on the piece's own. A small piece of a face that its
+    // feature's other pieces dwarf (one side of a plane a hole cuts in two, on a coarse CAD
+    // tessellation) is a face of its own, not part of the face beside it.
+    const auto gap_to = [&](int of) {
+      double gap = 0.0;
+      for (int f : component_faces[k])
+        for (int c = 0; c < 3; ++c) gap = std::max(gap, surface_gap(surfaces[of], mesh.V.row(mesh.F(f, c)).transpose()));
+      return gap;
+    };
+    const double own = std::max(gap_to(l), tolerance);
+    shared.erase(std::remove_if(shared.begin(), shared.end(), [&](const auto& s) { return !(gap_to(s.first) <= own); }),
+                 shared.end());
     if (shared.empty()) continue;
     const auto best = std::max_element(shared.begin(), shared.end(), [](const auto& a, const auto& b) {
       return a.second < b.second || (a.second == b.second && a.first > b.first);
