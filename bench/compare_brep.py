@@ -173,6 +173,7 @@ def main() -> int:
                         "lets the run go on while this one is rebuilt)")
     parser.add_argument("--only", action="append", metavar="NAME")
     parser.add_argument("--variant", action="append", choices=datasets.VARIANTS)
+    parser.add_argument("--real", action="store_true", help="the real meshes too (with --variant or --only)")
     parser.add_argument("--timeout", type=float, default=900, help="seconds per mesh")
     parser.add_argument("--out", default="compare-brep-new.json", help="file name of this checkout's results "
                         "under bench/results/")
@@ -193,7 +194,7 @@ def main() -> int:
         return 0
     tasks = [("part", name, v) for name in sorted(datasets.step_files_by_name())
              if not args.only or any(k in name for k in args.only) for v in (args.variant or datasets.VARIANTS)]
-    if not args.only and not args.variant:
+    if args.real or (not args.only and not args.variant):
         tasks += [("real", m["path"], "real") for m in datasets.load_real_meshes()]
     RESULTS.mkdir(parents=True, exist_ok=True)
     new = run(args.checkout, tasks, args.timeout)

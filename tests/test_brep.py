@@ -139,6 +139,37 @@ def test_noisy_scan_of_the_bracket_gives_the_designed_solid(noisy_scan):
 
 
 @needs_freecad
+@pytest.mark.parametrize("tolerance", [0.05, 0.01])
+def test_a_face_a_notch_cuts_off_stays_a_face(tolerance):
+    """A notch (a half hole) near the end of a block cuts its side face in two: a long piece and a
+    piece a tenth as large, on one plane. The small piece is its own face; it used to join the end
+    face beside it (the neighbour it shares most border with), whose plane is square to it, and the
+    solid lost that face and 1 % of its volume."""
+    FreeCAD, Part, _ = shapes.freecad()
+    part = Part.makeBox(100, 20, 20).cut(Part.makeCylinder(2, 20, FreeCAD.Vector(95, 0, 0)))
+    V, F, _ = shapes.tessellate_with_faces(part, tolerance)
+    solid = idealize.make_solid(idealize.idealize(Mesh(V, F)))
+    assert solid.solid and solid.analytic_area_fraction == pytest.approx(1.0)
+    assert solid.faces == len(part.Faces)
+    assert solid.volume == pytest.approx(part.Volume, rel=1e-6)
+
+
+@needs_freecad
+@shapes.needs_shared_data
+def test_a_face_healing_cannot_keep_fails_alone():
+    """On this part's CAD tessellation a band of a torus has two loops that OpenCASCADE's healing
+    cannot join: it kept four of the band's 106 edges. The band's neighbours then had free edges,
+    were blamed for them, and went to facets one after another (6 % of the area was analytic). The
+    band alone fails; every other face stays analytic."""
+    mesh = shapes.benchmark_mesh("as_isolated_blends_test_28.step", "cad")
+    layer = idealize.idealize(Mesh(mesh.V, mesh.F))
+    solid = idealize.make_solid(layer)
+    assert solid.solid
+    failed = [r for r in solid.regions if r["kind"] != "analytic"]
+    assert all(layer.features[r["feature"]]["type"] == "torus" for r in failed), [r["reason"] for r in failed]
+
+
+@needs_freecad
 def test_tangent_edges_are_exact():
     """A fillet meets its planes along lines of tangency: the edges are closed-form curves on both
     surfaces, not fitted ones."""

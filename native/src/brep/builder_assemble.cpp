@@ -1,6 +1,9 @@
 // Healing, sewing and the facets joined into shells and solids (builder.h).
 #include "brep/builder.h"
 
+#include <TopExp.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+
 namespace idealize {
 
 namespace {
@@ -205,6 +208,26 @@ void BrepBuilder::cover_sewn_pcurve_gaps(const TopoDS_Shape& shape) const {
     if (use.gap < kStrayEdge * tol_) cover_gap(use.edge, use.gap);
 }
 
+namespace {
+
+// Whether `healed` (ShapeFix_Face's result for `face`, its replacements in `context`) still holds
+// every edge of `face`, or what healing replaced it by: healing may add a seam, split or rebuild
+// an edge, but a face that lost an edge no longer closes against the neighbour across it.
+bool keeps_boundary(const TopoDS_Face& face, const TopoDS_Face& healed, const Handle(ShapeBuild_ReShape)& context) {
+  TopTools_IndexedMapOfShape kept;
+  TopExp::MapShapes(healed, TopAbs_EDGE, kept);
+  for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) {
+    if (BRep_Tool::Degenerated(TopoDS::Edge(e.Current()))) continue;
+    const TopoDS_Shape now = context.IsNull() ? e.Current() : context->Value(e.Current());
+    if (now.IsNull()) return false;
+    for (TopExp_Explorer piece(now, TopAbs_EDGE); piece.More(); piece.Next())
+      if (!kept.Contains(piece.Current())) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 // The faces that need no healing: valid as built (planar facets by construction), and bounded.
 std::vector<char> BrepBuilder::sound_faces() const {
   const int face_count = static_cast<int>(faces_.size());
@@ -281,6 +304,13 @@ TopoDS_Shape BrepBuilder::sew(BrepResult& result, const std::vector<char>& stray
       // What it replaced, for the facets that share those edges and vertices (its own record:
       // given one, it copies the edges it changes instead of changing them for both faces).
       const Handle(ShapeBuild_ReShape) context = fix.Context();
+      if (!keeps_boundary(faces_[i], fix.Face(), context)) {
+        // (Healing a band on a torus whose loops it could not join kept a corner of it.)
+        const std::string why = "healing its face lost part of its boundary";
+        result.problems.push_back({topo_.region_feature[face_region_[i]], why});
+        fail(face_region_[i], why);
+        continue;
+      }
       for (const TopAbs_ShapeEnum type : {TopAbs_EDGE, TopAbs_VERTEX})
         if (!context.IsNull())
           for (TopExp_Explorer e(faces_[i], type); e.More(); e.Next())
