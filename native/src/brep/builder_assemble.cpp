@@ -2,6 +2,7 @@
 #include "brep/builder.h"
 
 #include <TopExp.hxx>
+#include <functional>
 #include <TopTools_IndexedMapOfShape.hxx>
 
 namespace idealize {
@@ -212,17 +213,23 @@ namespace {
 
 // Whether `healed` (ShapeFix_Face's result for `face`, its replacements in `context`) still holds
 // every edge of `face`, or what healing replaced it by: healing may add a seam, split or rebuild
-// an edge, but a face that lost an edge no longer closes against the neighbour across it.
+// an edge, but a face that lost an edge no longer closes against the neighbour across it. (An edge
+// healing replaced may be replaced again, by pieces where the seam crosses it: followed to the
+// end.)
 bool keeps_boundary(const TopoDS_Face& face, const TopoDS_Face& healed, const Handle(ShapeBuild_ReShape)& context) {
   TopTools_IndexedMapOfShape kept;
   TopExp::MapShapes(healed, TopAbs_EDGE, kept);
-  for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) {
-    if (BRep_Tool::Degenerated(TopoDS::Edge(e.Current()))) continue;
-    const TopoDS_Shape now = context.IsNull() ? e.Current() : context->Value(e.Current());
-    if (now.IsNull()) return false;
-    for (TopExp_Explorer piece(now, TopAbs_EDGE); piece.More(); piece.Next())
-      if (!kept.Contains(piece.Current())) return false;
-  }
+  const std::function<bool(const TopoDS_Shape&, int)> held = [&](const TopoDS_Shape& edge, int depth) {
+    if (kept.Contains(edge)) return true;
+    if (context.IsNull() || !context->IsRecorded(edge) || depth > kept.Extent()) return false;
+    const TopoDS_Shape now = context->Value(edge);
+    if (now.IsNull() || now.IsSame(edge)) return false;
+    bool all = true;
+    for (TopExp_Explorer piece(now, TopAbs_EDGE); piece.More() && all; piece.Next()) all = held(piece.Current(), depth + 1);
+    return all;
+  };
+  for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next())
+    if (!BRep_Tool::Degenerated(TopoDS::Edge(e.Current())) && !held(e.Current(), 0)) return false;
   return true;
 }
 
