@@ -109,16 +109,19 @@ std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopo
       }
     }
     // Only a neighbour whose surface explains the piece takes it: its vertices lie on that surface
-    // within the tolerance, or as close as on the piece's own. A small piece of a face that its
-    // feature's other pieces dwarf (one side of a plane a hole cuts in two, on a coarse CAD
-    // tessellation) is a face of its own, not part of the face beside it.
+    // within the tolerance, or about as close as on the piece's own: within twice that distance,
+    // since a rim between two tangent surfaces lies in the noise of both, and the noise's extent
+    // over a handful of vertices is uncertain by as much again (on scans, rims lie up to 1.6 times
+    // as far from the neighbour that should take them). A small piece of a face that its feature's
+    // other pieces dwarf (one side of a plane a hole cuts in two, on a coarse CAD tessellation)
+    // lies as far from the perpendicular face beside it as it is wide: it is a face of its own.
     const auto gap_to = [&](int of) {
       double gap = 0.0;
       for (int f : component_faces[k])
         for (int c = 0; c < 3; ++c) gap = std::max(gap, surface_gap(surfaces[of], mesh.V.row(mesh.F(f, c)).transpose()));
       return gap;
     };
-    const double own = std::max(gap_to(l), tolerance);
+    const double own = 2.0 * std::max(gap_to(l), tolerance);
     shared.erase(std::remove_if(shared.begin(), shared.end(), [&](const auto& s) { return !(gap_to(s.first) <= own); }),
                  shared.end());
     if (shared.empty()) continue;

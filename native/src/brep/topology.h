@@ -42,9 +42,9 @@ struct BoundaryTopology {
 // connected piece of a feature other than its largest that is smaller than `island_fraction` of
 // the largest joins the neighbour it shares the longest boundary with (rims a reassignment left
 // behind would otherwise become sliver faces), among the neighbours whose surface passes its
-// vertices within `tolerance` or as close as its own. `surfaces` are indexed by feature. Faces that no
-// feature reaches (a connected part of the mesh without any label) get `unexplained`; with the
-// default -1 they raise MeshError instead.
+// vertices within twice `tolerance` or twice their distance from its own. `surfaces` are indexed
+// by feature. Faces that no feature reaches (a connected part of the mesh without any label) get
+// `unexplained`; with the default -1 they raise MeshError instead.
 std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopology& topology,
                                         const std::vector<int>& labels,
                                         const std::vector<Surface>& surfaces, double tolerance,
