@@ -108,22 +108,21 @@ std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopo
         else ++it->second;
       }
     }
-    // Only a neighbour whose surface explains the piece takes it: its vertices lie on that surface
-    // within the tolerance, or about as close as on the piece's own: within twice that distance,
-    // since a rim between two tangent surfaces lies in the noise of both, and the noise's extent
-    // over a handful of vertices is uncertain by as much again (on scans, rims lie up to 1.6 times
-    // as far from the neighbour that should take them). A small piece of a face that its feature's
-    // other pieces dwarf (one side of a plane a hole cuts in two, on a coarse CAD tessellation)
-    // lies as far from the perpendicular face beside it as it is wide: it is a face of its own.
+    // A piece that lies on its own surface within the tolerance, and on a neighbour's beyond it, is
+    // a face that a hole or a notch cut off (one side of a plane, on a coarse CAD tessellation; it
+    // lies as far from the perpendicular face beside it as it is wide): only a neighbour whose
+    // surface passes its vertices within twice the tolerance (one on either side of the border
+    // between them) takes it. (On a scan the noise puts
+    // a rim off both surfaces; there the neighbour it shares most border with takes it, whichever.)
     const auto gap_to = [&](int of) {
       double gap = 0.0;
       for (int f : component_faces[k])
         for (int c = 0; c < 3; ++c) gap = std::max(gap, surface_gap(surfaces[of], mesh.V.row(mesh.F(f, c)).transpose()));
       return gap;
     };
-    const double own = 2.0 * std::max(gap_to(l), tolerance);
-    shared.erase(std::remove_if(shared.begin(), shared.end(), [&](const auto& s) { return !(gap_to(s.first) <= own); }),
-                 shared.end());
+    if (gap_to(l) <= tolerance)
+      shared.erase(std::remove_if(shared.begin(), shared.end(), [&](const auto& s) { return !(gap_to(s.first) <= 2.0 * tolerance); }),
+                   shared.end());
     if (shared.empty()) continue;
     const auto best = std::max_element(shared.begin(), shared.end(), [](const auto& a, const auto& b) {
       return a.second < b.second || (a.second == b.second && a.first > b.first);

@@ -41,9 +41,9 @@ struct BoundaryTopology {
 // feature whose surface passes closest to them, growing inwards from labelled faces; then every
 // connected piece of a feature other than its largest that is smaller than `island_fraction` of
 // the largest joins the neighbour it shares the longest boundary with (rims a reassignment left
-// behind would otherwise become sliver faces), among the neighbours whose surface passes its
-// vertices within twice `tolerance` or twice their distance from its own. `surfaces` are indexed
-// by feature. Faces that no feature reaches (a connected part of the mesh without any label) get
+// behind would otherwise become sliver faces); a piece within `tolerance` of its own surface
+// joins only a neighbour whose surface passes its vertices within twice that. `surfaces` are
+// indexed by feature. Faces that no feature reaches (a connected part of the mesh without any label) get
 // `unexplained`; with the default -1 they raise MeshError instead.
 std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopology& topology,
                                         const std::vector<int>& labels,
