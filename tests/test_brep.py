@@ -159,7 +159,7 @@ def test_a_face_a_notch_cuts_off_stays_a_face(tolerance):
 def test_a_face_healing_cannot_keep_fails_alone():
     """On this part's CAD tessellation a band of a torus has two loops that OpenCASCADE's healing
     cannot join: it kept four of the band's 106 edges. The band's neighbours then had free edges,
-    were blamed for them, and went to facets one after another (6 % of the area was analytic). The
+    were blamed for them, and went to facets one after another (19 of 112 regions analytic). The
     band alone fails; every other face stays analytic."""
     mesh = shapes.benchmark_mesh("as_isolated_blends_test_28.step", "cad")
     layer = idealize.idealize(Mesh(mesh.V, mesh.F))
