@@ -193,6 +193,18 @@ def test_a_repeated_triangle_of_the_input_does_not_stop_an_edit():
     assert idealize.make_solid(edited).volume == pytest.approx(60 * 40 * 25, rel=1e-6)
 
 
+def run_apart(tmp_path, body, timeout):
+    """Runs the script `body` (which reads REPO, the repository's path) in a process of its own, so
+    that a crash fails the test instead of ending the test run; its CompletedProcess."""
+    import os
+    import subprocess
+    import sys
+    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    script = tmp_path / "apart.py"
+    script.write_text("REPO = %r\n" % repo + body)
+    return subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=timeout)
+
+
 CORNER_BALL_EDITS = r'''
 import sys
 sys.path[:0] = [REPO, REPO + "/tests"]
@@ -225,13 +237,7 @@ def test_editing_a_box_with_corner_balls_never_crashes(tmp_path):
     process in CGAL's tangential relaxation, reading past its arrays at a vertex whose triangles were
     all degenerate. Every edit must end in a result or an EditConflict; run apart, so that a crash is
     a failure here and not the end of the test run."""
-    import os
-    import subprocess
-    import sys
-    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    script = tmp_path / "corner_balls.py"
-    script.write_text("REPO = %r\n" % repo + CORNER_BALL_EDITS)
-    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=1200)
+    run = run_apart(tmp_path, CORNER_BALL_EDITS, timeout=1200)
     assert run.returncode == 0, "the edits crashed (exit %d): %s" % (run.returncode, run.stderr[-2000:])
     assert run.stdout.startswith("20 edits:")
 
@@ -272,14 +278,8 @@ def test_pushing_a_real_mesh_never_runs_away(tmp_path):
     surfaces (a plane and a cylinder that were not a tangent pair) to where they cross, thousands of
     units away; remeshing that took all memory. Every push of a plane or cylinder by +-1 must end in a
     result no larger than the push allows, or an EditConflict, within a bounded memory."""
-    import os
-    import subprocess
-    import sys
-    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     mesh = shapes.SHARED_STEP.parent / "mesh" / "fandisk.obj"
-    script = tmp_path / "real_pushes.py"
-    script.write_text("REPO = %r\nMESH = %r\n" % (repo, str(mesh)) + REAL_MESH_PUSHES)
-    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=600)
+    run = run_apart(tmp_path, "MESH = %r\n" % str(mesh) + REAL_MESH_PUSHES, timeout=600)
     assert run.returncode == 0, "the edits failed (exit %d): %s" % (run.returncode, run.stderr[-2000:])
     assert " edits:" in run.stdout
 

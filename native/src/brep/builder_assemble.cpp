@@ -2,8 +2,9 @@
 #include "brep/builder.h"
 
 #include <TopExp.hxx>
-#include <functional>
 #include <TopTools_IndexedMapOfShape.hxx>
+
+#include <functional>
 
 namespace idealize {
 
@@ -225,7 +226,8 @@ bool keeps_boundary(const TopoDS_Face& face, const TopoDS_Face& healed, const Ha
     const TopoDS_Shape now = context->Value(edge);
     if (now.IsNull() || now.IsSame(edge)) return false;
     bool all = true;
-    for (TopExp_Explorer piece(now, TopAbs_EDGE); piece.More() && all; piece.Next()) all = held(piece.Current(), depth + 1);
+    for (TopExp_Explorer piece(now, TopAbs_EDGE); piece.More() && all; piece.Next())
+      all = held(piece.Current(), depth + 1);
     return all;
   };
   for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next())

@@ -112,16 +112,18 @@ std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopo
     // a face that a hole or a notch cut off (one side of a plane, on a coarse CAD tessellation; it
     // lies as far from the perpendicular face beside it as it is wide): only a neighbour whose
     // surface passes its vertices within twice the tolerance (one on either side of the border
-    // between them) takes it. (On a scan the noise puts
-    // a rim off both surfaces; there the neighbour it shares most border with takes it, whichever.)
+    // between them) takes it. (On a scan the noise puts a rim off both surfaces; there the
+    // neighbour it shares most border with takes it, whichever.)
     const auto gap_to = [&](int of) {
       double gap = 0.0;
       for (int f : component_faces[k])
-        for (int c = 0; c < 3; ++c) gap = std::max(gap, surface_gap(surfaces[of], mesh.V.row(mesh.F(f, c)).transpose()));
+        for (int c = 0; c < 3; ++c)
+          gap = std::max(gap, surface_gap(surfaces[of], mesh.V.row(mesh.F(f, c)).transpose()));
       return gap;
     };
     if (gap_to(l) <= tolerance)
-      shared.erase(std::remove_if(shared.begin(), shared.end(), [&](const auto& s) { return !(gap_to(s.first) <= 2.0 * tolerance); }),
+      shared.erase(std::remove_if(shared.begin(), shared.end(),
+                                  [&](const auto& s) { return !(gap_to(s.first) <= 2.0 * tolerance); }),
                    shared.end());
     if (shared.empty()) continue;
     const auto best = std::max_element(shared.begin(), shared.end(), [](const auto& a, const auto& b) {

@@ -43,8 +43,8 @@ struct BoundaryTopology {
 // the largest joins the neighbour it shares the longest boundary with (rims a reassignment left
 // behind would otherwise become sliver faces); a piece within `tolerance` of its own surface
 // joins only a neighbour whose surface passes its vertices within twice that. `surfaces` are
-// indexed by feature. Faces that no feature reaches (a connected part of the mesh without any label) get
-// `unexplained`; with the default -1 they raise MeshError instead.
+// indexed by feature. Faces that no feature reaches (a connected part of the mesh without any
+// label) get `unexplained`; with the default -1 they raise MeshError instead.
 std::vector<int> complete_face_features(const TriangleMesh& mesh, const MeshTopology& topology,
                                         const std::vector<int>& labels,
                                         const std::vector<Surface>& surfaces, double tolerance,

@@ -157,9 +157,8 @@ Eigen::MatrixXd harmonic_correction(const TriangleMesh& mesh, const std::vector<
 // of the layer) cross far from the mesh's border between them. Remeshing it would build a
 // surface the size of that distance at the feature's edge length (billions of triangles).
 void refuse_runaway(const TriangleMesh& mesh, const MatrixX3d& V, const std::vector<std::vector<int>>& around,
-                    const std::vector<Surface>& before, const std::vector<Surface>& after,
-                    const std::vector<char>& changed, const std::vector<Eigen::Isometry3d>& motions,
-                    double length) {
+                    const std::vector<Surface>& after, const std::vector<char>& changed,
+                    const std::vector<Eigen::Isometry3d>& motions, double length) {
   double reach = 0.0;  // the farthest the edit itself carries a point of a changed feature
   for (int v = 0; v < mesh.num_vertices(); ++v)
     for (int f : around[v])
@@ -176,13 +175,15 @@ void refuse_runaway(const TriangleMesh& mesh, const MatrixX3d& V, const std::vec
   };
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     if (distance(v) <= reach + length) continue;
-    if (worst < 0 || std::make_pair(around[v].size(), distance(v)) > std::make_pair(around[worst].size(), distance(worst)))
+    if (worst < 0 ||
+        std::make_pair(around[v].size(), distance(v)) > std::make_pair(around[worst].size(), distance(worst)))
       worst = v;
   }
   if (worst < 0) return;
   std::string names;
   for (int f : around[worst])
-    names += std::string(names.empty() ? "" : " and ") + std::to_string(f) + " (" + surface_type_name(before[f].type) + ")";
+    names += std::string(names.empty() ? "" : " and ") + std::to_string(f) + " (" +
+             surface_type_name(after[f].type) + ")";
   throw EditConflict("the edit would carry the border of features " + names +
                      " far outside the part: their surfaces no longer cross near that border (nearly "
                      "tangent); the layer is unchanged");
@@ -292,7 +293,7 @@ MovedVertices move_vertices(const TriangleMesh& mesh, const std::vector<int>& la
         out.V.row(v) = onto_features(around[v], after, g1, x, length).transpose();
       }
   }
-  refuse_runaway(mesh, out.V, around, before, after, changed, propagation.motions, length);
+  refuse_runaway(mesh, out.V, around, after, changed, propagation.motions, length);
   // The region remeshing redoes.
   out.region.assign(mesh.num_faces(), 0);
   for (int f = 0; f < mesh.num_faces(); ++f) {
